@@ -1,0 +1,53 @@
+# Thin wrappers; README.md names two of them (demo, test). Everything builds into build/.
+SHELL := /bin/bash
+.SHELLFLAGS := -eu -o pipefail -c
+REPO := $(CURDIR)
+BUILD := $(REPO)/build
+CATKIN_BUILD := $(BUILD)/catkin
+DEVEL := $(BUILD)/devel
+VENV := $(REPO)/.venv
+OUT ?= $(REPO)/out
+JOBS ?= $(shell nproc)
+
+# Debian's interpreter and tools first: the pyenv python3 on some PATHs cannot see ROS.
+export PATH := $(VENV)/bin:/usr/bin:$(PATH)
+export ROS_HOME := $(BUILD)/ros_home
+export FOLLOW_BOT_VENV := $(VENV)
+ROSENV := source $(DEVEL)/setup.bash &&
+
+.PHONY: deps build demo test lint format bench clean
+
+deps:
+	tools/install_deps.sh
+
+build: deps
+	mkdir -p $(CATKIN_BUILD)
+	touch $(BUILD)/CATKIN_IGNORE $(BUILD)/COLCON_IGNORE
+	cd $(CATKIN_BUILD) && cmake $(REPO) -DCATKIN_DEVEL_PREFIX=$(DEVEL) \
+	  -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 >/dev/null
+	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory
+	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory tests
+
+demo: build
+	mkdir -p $(OUT)
+	$(ROSENV) roslaunch --skip-log-check image_converter demo.launch out:=$(OUT)
+
+lint: deps
+	tools/lint.sh
+
+format: deps
+	tools/lint.sh --fix
+
+test: build lint
+	rm -rf $(BUILD)/test_results && mkdir -p $(BUILD)/test_results
+	$(ROSENV) $(MAKE) -C $(CATKIN_BUILD) --no-print-directory run_tests >$(BUILD)/run_tests.log 2>&1 \
+	  || { tail -50 $(BUILD)/run_tests.log; true; }
+	$(ROSENV) $(VENV)/bin/python3 -m pytest -q harness/test tests \
+	  --junitxml=$(BUILD)/test_results/pytest.xml || true
+	/usr/bin/python3 tools/test_summary.py $(BUILD)/test_results $(CATKIN_BUILD)/test_results
+
+bench: build
+	$(ROSENV) tools/bench.sh
+
+clean:
+	rm -rf $(BUILD) $(OUT)

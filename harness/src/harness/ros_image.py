@@ -1,0 +1,24 @@
+"""numpy <-> sensor_msgs/Image without cv_bridge (its Python module is built for Debian's numpy)."""
+
+import numpy as np
+from sensor_msgs.msg import Image
+
+
+def bgr_to_msg(image: np.ndarray, stamp, frame_id: str) -> Image:
+    """Packs an HxWx3 uint8 BGR array into a bgr8 Image message."""
+    msg = Image()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    msg.height, msg.width = image.shape[:2]
+    msg.encoding = "bgr8"
+    msg.step = msg.width * 3
+    msg.data = np.ascontiguousarray(image, dtype=np.uint8).tobytes()
+    return msg
+
+
+def msg_to_bgr(msg: Image) -> np.ndarray:
+    """Unpacks a bgr8 Image message (any row padding) into an HxWx3 uint8 array."""
+    if msg.encoding != "bgr8":
+        raise ValueError(f"expected a bgr8 image, got {msg.encoding!r}")
+    rows = np.frombuffer(msg.data, dtype=np.uint8).reshape(msg.height, msg.step)
+    return rows[:, : msg.width * 3].reshape(msg.height, msg.width, 3)

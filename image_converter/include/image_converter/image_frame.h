@@ -1,0 +1,55 @@
+// ROS-free description, validation and normalisation of raw camera frames.
+//
+// A sensor_msgs/Image is just (width, height, encoding, step, data). Before any of it is
+// wrapped in a cv::Mat the fields must agree, or OpenCV would read past the buffer. This
+// header checks that agreement and turns every supported encoding into BGR8.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace image_converter {
+
+// The encodings every node in this project accepts (sensor_msgs/image_encodings names).
+enum class Encoding { kBgr8, kRgb8, kBgra8, kRgba8, kMono8, kMono16 };
+
+// Largest accepted width or height; anything bigger is a corrupt header, not a camera.
+constexpr std::uint32_t kMaxDimension = 16384;
+
+// Maps an encoding name to the supported set. "8UC1" and "8UC3" are treated as mono8 and bgr8.
+std::optional<Encoding> parseEncoding(const std::string& name);
+
+int channels(Encoding encoding);
+int bytesPerPixel(Encoding encoding);
+// The OpenCV type (CV_8UC3, CV_16UC1, ...) of one frame in this encoding.
+int cvType(Encoding encoding);
+
+// The header fields and buffer of a frame, as they arrive (possibly inconsistent).
+struct RawFrame {
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  std::string encoding;
+  std::uint32_t step = 0;  // bytes per row
+  const std::uint8_t* data = nullptr;
+  std::size_t data_size = 0;
+};
+
+// Result of validating a RawFrame: either the parsed encoding, or a message naming the problem.
+struct FrameCheck {
+  std::optional<Encoding> encoding;
+  std::string error;  // empty when valid
+  bool ok() const { return error.empty(); }
+};
+
+// Checks encoding, dimensions, step and buffer size. Never reads the pixel data.
+FrameCheck checkFrame(const RawFrame& frame);
+
+// Converts a frame in any supported encoding into a new BGR8 image (always a fresh buffer, so
+// the caller may draw on it). mono16 is scaled to 8 bits as value / 256, rounded and saturated.
+cv::Mat toBgr8(const cv::Mat& image, Encoding encoding);
+
+}  // namespace image_converter

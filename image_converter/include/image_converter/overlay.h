@@ -1,0 +1,21 @@
+// The lecture's overlay: a red circle at the image centre.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+namespace image_converter {
+
+struct OverlayConfig {
+  int radius_px = 25;       // circle radius, pixels
+  int thickness_px = 2;     // outline thickness, pixels
+  int min_image_size = 50;  // the circle is drawn only when width and height exceed this
+};
+
+// True when the configuration can be drawn (positive radius and thickness, non-negative minimum).
+bool isValid(const OverlayConfig& config);
+
+// Draws the overlay in place on a BGR8 image. Returns false (and leaves the image untouched)
+// when the image is not larger than config.min_image_size in both dimensions.
+bool drawOverlay(cv::Mat& bgr, const OverlayConfig& config);
+
+}  // namespace image_converter

@@ -1,0 +1,36 @@
+// A node that is only a loader: it runs one nodelet in its own process, so the node and the
+// nodelet share every line of behaviour.
+#pragma once
+
+#include <map>
+#include <string>
+
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+
+namespace image_converter {
+
+// Runs `nodelet` as node `default_name`. `default_remaps` maps a relative topic name to the
+// topic it should use when the user did not remap it on the command line (e.g. "image" ->
+// "/camera/rgb/image_raw"). Returns the process exit code: 1 when the nodelet fails to start
+// (bad parameters), 0 after a normal shutdown.
+inline int runNodelet(int argc, char** argv, const std::string& default_name,
+                      nodelet::Nodelet& nodelet,
+                      const std::map<std::string, std::string>& default_remaps) {
+  ros::init(argc, argv, default_name);
+  nodelet::M_string remappings = ros::names::getRemappings();
+  for (const auto& [from, to] : default_remaps) {
+    remappings.emplace(ros::names::resolve(from, false), to);  // keeps a user's remapping
+  }
+  nodelet::V_string my_argv(argv + 1, argv + argc);
+  try {
+    nodelet.init(ros::this_node::getName(), remappings, my_argv);
+  } catch (const std::exception& error) {
+    ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), error.what());
+    return 1;
+  }
+  ros::spin();
+  return 0;
+}
+
+}  // namespace image_converter

@@ -1,0 +1,108 @@
+#include "image_converter/image_frame.h"
+
+#include <opencv2/imgproc.hpp>
+
+namespace image_converter {
+
+std::optional<Encoding> parseEncoding(const std::string& name) {
+  if (name == "bgr8" || name == "8UC3") return Encoding::kBgr8;
+  if (name == "rgb8") return Encoding::kRgb8;
+  if (name == "bgra8") return Encoding::kBgra8;
+  if (name == "rgba8") return Encoding::kRgba8;
+  if (name == "mono8" || name == "8UC1") return Encoding::kMono8;
+  if (name == "mono16") return Encoding::kMono16;
+  return std::nullopt;
+}
+
+int channels(Encoding encoding) {
+  switch (encoding) {
+    case Encoding::kBgr8:
+    case Encoding::kRgb8:
+      return 3;
+    case Encoding::kBgra8:
+    case Encoding::kRgba8:
+      return 4;
+    case Encoding::kMono8:
+    case Encoding::kMono16:
+      return 1;
+  }
+  return 0;
+}
+
+int bytesPerPixel(Encoding encoding) {
+  return encoding == Encoding::kMono16 ? 2 : channels(encoding);
+}
+
+int cvType(Encoding encoding) {
+  return encoding == Encoding::kMono16 ? CV_16UC1 : CV_8UC(channels(encoding));
+}
+
+FrameCheck checkFrame(const RawFrame& frame) {
+  FrameCheck result;
+  result.encoding = parseEncoding(frame.encoding);
+  if (!result.encoding) {
+    result.error = "unsupported encoding '" + frame.encoding +
+                   "' (supported: bgr8, rgb8, bgra8, rgba8, mono8, mono16, 8UC1, 8UC3)";
+    return result;
+  }
+  if (frame.width == 0 || frame.height == 0) {
+    result.error =
+        "empty image (" + std::to_string(frame.width) + "x" + std::to_string(frame.height) + ")";
+    return result;
+  }
+  if (frame.width > kMaxDimension || frame.height > kMaxDimension) {
+    result.error = "absurd dimensions " + std::to_string(frame.width) + "x" +
+                   std::to_string(frame.height) + " (limit " + std::to_string(kMaxDimension) +
+                   " per side)";
+    return result;
+  }
+  // 64-bit arithmetic: width, height and step are at most 2^32, so no product overflows.
+  const std::uint64_t min_step =
+      static_cast<std::uint64_t>(frame.width) * bytesPerPixel(*result.encoding);
+  if (frame.step < min_step) {
+    result.error = "step " + std::to_string(frame.step) +
+                   " is less than width x bytes per pixel (" + std::to_string(min_step) + ") for " +
+                   frame.encoding;
+    return result;
+  }
+  const std::uint64_t expected_size = static_cast<std::uint64_t>(frame.height) * frame.step;
+  if (frame.data_size != expected_size) {
+    result.error = "data size " + std::to_string(frame.data_size) + " != height x step (" +
+                   std::to_string(expected_size) + ")";
+    return result;
+  }
+  if (frame.data == nullptr) {
+    result.error = "no pixel buffer";
+  }
+  return result;
+}
+
+cv::Mat toBgr8(const cv::Mat& image, Encoding encoding) {
+  cv::Mat bgr;
+  switch (encoding) {
+    case Encoding::kBgr8:
+      bgr = image.clone();
+      break;
+    case Encoding::kRgb8:
+      cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
+      break;
+    case Encoding::kBgra8:
+      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
+      break;
+    case Encoding::kRgba8:
+      cv::cvtColor(image, bgr, cv::COLOR_RGBA2BGR);
+      break;
+    case Encoding::kMono8:
+      cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
+      break;
+    case Encoding::kMono16: {
+      cv::Mat mono8;
+      image.convertTo(mono8, CV_8U, 1.0 / 256.0);
+      cv::cvtColor(mono8, bgr, cv::COLOR_GRAY2BGR);
+      break;
+    }
+  }
+  return bgr;
+}
+
+}  // namespace image_converter

@@ -1,0 +1,127 @@
+// ImageConverter: the lecture's node (ROS Lecture 10) as a lazy nodelet.
+//
+// Subscribes `image` (image_transport, queue 1), draws a red circle at the centre and publishes
+// `~output` (bgr8). Input is subscribed only while `~output` has subscribers or a window is
+// shown, so an idle converter costs nothing.
+#include <algorithm>
+#include <cstdlib>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include <cv_bridge/cv_bridge.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <opencv2/highgui.hpp>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "image_converter/image_converter_nodelet.h"
+#include "image_converter/overlay.h"
+#include "image_converter/ros/frame_msg.h"
+
+namespace image_converter {
+
+namespace {
+constexpr char kWindowName[] = "image_converter";
+
+bool displayAvailable() {
+  const char* display = std::getenv("DISPLAY");
+  return display != nullptr && display[0] != '\0';
+}
+}  // namespace
+
+void ImageConverterNodelet::onInit() {
+  ros::NodeHandle& nh = getNodeHandle();
+  ros::NodeHandle& pnh = getPrivateNodeHandle();
+
+  pnh.param("circle_radius", overlay_.radius_px, overlay_.radius_px);
+  pnh.param("circle_thickness", overlay_.thickness_px, overlay_.thickness_px);
+  pnh.param("display", display_, false);
+  pnh.param<std::string>("image_transport", transport_, "raw");
+  if (!isValid(overlay_)) {
+    throw std::invalid_argument("~circle_radius and ~circle_thickness must be > 0 (got " +
+                                std::to_string(overlay_.radius_px) + ", " +
+                                std::to_string(overlay_.thickness_px) + ")");
+  }
+  if (display_ && !displayAvailable()) {
+    NODELET_WARN(
+        "~display is true but no X display is available (DISPLAY is unset); "
+        "running headless, use the ~output topic instead");
+    display_ = false;
+  }
+
+  input_transport_ = std::make_unique<image_transport::ImageTransport>(nh);
+  image_transport::ImageTransport private_transport(pnh);
+  const std::vector<std::string> transports = input_transport_->getLoadableTransports();
+  // Lookup names are "<package>/<transport>", e.g. "image_transport/raw".
+  const bool installed =
+      std::any_of(transports.begin(), transports.end(), [this](const std::string& name) {
+        return name.size() > transport_.size() &&
+               name.compare(name.size() - transport_.size() - 1, std::string::npos,
+                            "/" + transport_) == 0;
+      });
+  if (!installed) {
+    throw std::invalid_argument("~image_transport '" + transport_ +
+                                "' is not an installed image_transport plugin");
+  }
+
+  std::lock_guard<std::mutex> lock(connection_mutex_);
+  const auto on_connection_change = [this](const image_transport::SingleSubscriberPublisher&) {
+    updateSubscription();
+  };
+  output_ = private_transport.advertise("output", 1, on_connection_change, on_connection_change);
+  if (display_) {
+    cv::namedWindow(kWindowName);
+    subscribe();
+  }
+}
+
+ImageConverterNodelet::~ImageConverterNodelet() {
+  if (display_) cv::destroyWindow(kWindowName);
+}
+
+void ImageConverterNodelet::updateSubscription() {
+  std::lock_guard<std::mutex> lock(connection_mutex_);
+  if (display_) return;  // the window keeps the input subscribed
+  if (output_.getNumSubscribers() == 0) {
+    input_.shutdown();
+  } else if (!input_) {
+    subscribe();
+  }
+}
+
+void ImageConverterNodelet::subscribe() {
+  const image_transport::TransportHints hints(transport_, ros::TransportHints(),
+                                              getPrivateNodeHandle());
+  input_ = input_transport_->subscribe("image", 1, &ImageConverterNodelet::onImage, this, hints);
+}
+
+void ImageConverterNodelet::onImage(const sensor_msgs::ImageConstPtr& msg) {
+  const FrameCheck check = checkFrame(rawFrameOf(*msg));
+  if (!check.ok()) {
+    NODELET_ERROR_THROTTLE(1.0, "dropping frame on %s: %s", input_.getTopic().c_str(),
+                           check.error.c_str());
+    return;
+  }
+  cv_bridge::CvImageConstPtr shared;
+  try {
+    shared = cv_bridge::toCvShare(msg);  // no copy: a view of the message's buffer
+  } catch (const cv_bridge::Exception& error) {
+    NODELET_ERROR_THROTTLE(1.0, "dropping frame on %s: %s", input_.getTopic().c_str(),
+                           error.what());
+    return;
+  }
+  // The one copy: the overlay must not be drawn into a buffer other subscribers share.
+  cv_bridge::CvImage annotated(msg->header, "bgr8", toBgr8(shared->image, *check.encoding));
+  drawOverlay(annotated.image, overlay_);
+
+  if (output_.getNumSubscribers() > 0) output_.publish(annotated.toImageMsg());
+  if (display_) {
+    cv::imshow(kWindowName, annotated.image);
+    cv::waitKey(1);
+  }
+}
+
+}  // namespace image_converter
+
+PLUGINLIB_EXPORT_CLASS(image_converter::ImageConverterNodelet, nodelet::Nodelet)
