@@ -1,6 +1,6 @@
 # Thin wrappers; README.md names two of them (demo, test). Everything builds into build/.
 SHELL := /bin/bash
-.SHELLFLAGS := -eu -o pipefail -c
+.SHELLFLAGS := -e -o pipefail -c
 REPO := $(CURDIR)
 BUILD := $(REPO)/build
 CATKIN_BUILD := $(BUILD)/catkin
