@@ -39,12 +39,7 @@ format: deps
 	tools/lint.sh --fix
 
 test: build lint
-	rm -rf $(BUILD)/test_results && mkdir -p $(BUILD)/test_results
-	$(ROSENV) $(MAKE) -C $(CATKIN_BUILD) --no-print-directory run_tests >$(BUILD)/run_tests.log 2>&1 \
-	  || { tail -50 $(BUILD)/run_tests.log; true; }
-	$(ROSENV) $(VENV)/bin/python3 -m pytest -q harness/test tests \
-	  --junitxml=$(BUILD)/test_results/pytest.xml || true
-	/usr/bin/python3 tools/test_summary.py $(BUILD)/test_results $(CATKIN_BUILD)/test_results
+	tools/run_tests.sh
 
 bench: build
 	$(ROSENV) tools/bench.sh

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Runs every test suite after the build, then one closing summary over all JUnit results.
+# A suite whose runner breaks (rather than reporting failed tests) fails the run too.
+set -uo pipefail
+repo=$(cd "$(dirname "$0")/.." && pwd)
+build=$repo/build
+venv=${FOLLOW_BOT_VENV:-$repo/.venv}
+# shellcheck disable=SC1091
+source "$build/devel/setup.bash"
+rm -rf "$build/test_results" "$build/catkin/test_results"
+mkdir -p "$build/test_results"
+status=0
+
+echo "== gtest + rostest (catkin run_tests; log: build/run_tests.log)"
+if ! make -C "$build/catkin" --no-print-directory run_tests >"$build/run_tests.log" 2>&1; then
+  tail -50 "$build/run_tests.log"
+  echo "catkin run_tests broke (see build/run_tests.log)"
+  status=1
+fi
+
+echo "== pytest"
+"$venv/bin/python3" -m pytest -q harness/test tests --junitxml="$build/test_results/pytest.xml"
+rc=$?
+if [ $rc -ne 0 ] && [ $rc -ne 1 ]; then  # 1 = some tests failed, counted from the XML below
+  echo "pytest broke (exit $rc)"
+  status=1
+fi
+
+/usr/bin/python3 "$repo/tools/test_summary.py" "$build/test_results" "$build/catkin/test_results" ||
+  status=1
+exit $status
