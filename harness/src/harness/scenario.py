@@ -1,0 +1,258 @@
+"""Scenario files (tests/scenarios/*.yaml): what to run, what to disturb, what must hold.
+
+A scenario names a world, the behaviour to launch (or a built-in scripted driver), a duration
+and stop condition, perturbations and pass criteria over the metrics of `metrics()`. Schema in
+worlds/SCHEMA.md. Everything is validated on load; errors name the field.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from harness import scoring
+from harness.simulation import Perturbations
+from harness.validation import Fields, ValidationError, boolean, mapping, number, string, vector
+from harness.world import World, WorldError, resolve_world_path
+
+STOP_CONDITIONS = ("duration", "lap_complete")
+
+
+class ScenarioError(ValidationError):
+    """A scenario file that cannot be run; the message names the offending field."""
+
+
+@dataclass(frozen=True)
+class Behaviour:
+    package: str
+    launch_file: str
+    args: dict[str, str]
+
+
+@dataclass(frozen=True)
+class Criterion:
+    metric: str  # dotted path into the metrics dict, e.g. "cross_track.rms"
+    minimum: float | None = None
+    maximum: float | None = None
+    equals: Any = None
+
+    def check(self, metrics: dict) -> tuple[Any, bool]:
+        value: Any = metrics
+        for key in self.metric.split("."):
+            value = value.get(key) if isinstance(value, dict) else None
+        if self.equals is not None:
+            return value, value == self.equals
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            return value, False  # a metric that is absent or None never passes a bound
+        ok = math.isfinite(value)
+        ok &= self.minimum is None or value >= self.minimum
+        ok &= self.maximum is None or value <= self.maximum
+        return value, bool(ok)
+
+    def describe(self) -> str:
+        if self.equals is not None:
+            return f"== {self.equals!r}"
+        parts = []
+        if self.minimum is not None:
+            parts.append(f">= {self.minimum:g}")
+        if self.maximum is not None:
+            parts.append(f"<= {self.maximum:g}")
+        return " and ".join(parts)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    world_path: Path
+    start: tuple[float, float, float] | None
+    behaviour: Behaviour | None
+    constant_command: tuple[float, float] | None  # scripted driver when there is no behaviour
+    rate_hz: float
+    duration: float
+    stop_when: str
+    lockstep: bool
+    reply_timeout: float  # wall seconds to wait for the behaviour's command in lockstep
+    perturbations: Perturbations
+    target: str | None  # object name for stop distance and bearing
+    goal: str | None  # marker name to park in front of
+    standoff: float
+    criteria: tuple[Criterion, ...]
+    source: Path | None = None
+
+
+def _world_file(value: Any, where: str, base: Path) -> Path:
+    try:
+        return resolve_world_path(string(value, where), base)
+    except WorldError as error:
+        raise ScenarioError(f"{where}: {error}") from None
+
+
+def _parse_behaviour(value: Any, where: str) -> Behaviour:
+    f = Fields(value, where, {"launch", "args"})
+    launch = f.get("launch", string).split()
+    if len(launch) != 2 or not launch[1].endswith(".launch"):
+        raise ScenarioError(f"{f.where('launch')}: must be '<package> <file>.launch'")
+    args = f.get("args", mapping, {})
+    return Behaviour(launch[0], launch[1], {str(k): str(v) for k, v in args.items()})
+
+
+def _parse_dropouts(value: Any, where: str) -> tuple[tuple[float, float], ...]:
+    if not isinstance(value, list):
+        raise ScenarioError(f"{where}: must be a list of [start, end] times")
+    out = []
+    for i, item in enumerate(value):
+        start, end = vector(2, number(ge=0.0))(item, f"{where}[{i}]")
+        if end <= start:
+            raise ScenarioError(f"{where}[{i}]: end must be after start, got {item!r}")
+        out.append((start, end))
+    return tuple(out)
+
+
+def _parse_perturbations(value: Any, where: str) -> Perturbations:
+    f = Fields(value, where, {"gain", "noise_sigma", "delay_steps", "dropout"})
+    delay = f.get("delay_steps", number(ge=0.0), None)
+    if delay is not None and delay != int(delay):
+        raise ScenarioError(f"{f.where('delay_steps')}: must be a whole number, got {delay!r}")
+    return Perturbations(
+        gain=f.get("gain", number(gt=0.0), None),
+        noise_sigma=f.get("noise_sigma", number(ge=0.0), None),
+        delay_steps=None if delay is None else int(delay),
+        dropouts=f.get("dropout", _parse_dropouts, ()),
+    )
+
+
+def _parse_criteria(value: Any, where: str) -> tuple[Criterion, ...]:
+    out = []
+    for metric, rule in mapping(value, where).items():
+        r = Fields(rule, f"{where}.{metric}", {"min", "max", "equals"})
+        criterion = Criterion(
+            str(metric),
+            r.get("min", number(), None),
+            r.get("max", number(), None),
+            r.data.get("equals"),
+        )
+        if criterion.minimum is None and criterion.maximum is None and criterion.equals is None:
+            raise ScenarioError(f"{r.path}: needs min, max or equals")
+        out.append(criterion)
+    return tuple(out)
+
+
+def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = None) -> Scenario:
+    base = Path(base_dir)
+    allowed = {
+        "name", "world", "start", "behaviour", "driver", "rate_hz", "duration", "stop_when",
+        "lockstep", "reply_timeout", "perturbations", "target", "goal", "standoff", "criteria",
+    }  # fmt: skip
+    try:
+        f = Fields(data, "", allowed)
+        behaviour = f.get("behaviour", _parse_behaviour, None)
+        driver = f.get("driver", lambda v, w: Fields(v, w, {"constant"}), None)
+        constant = driver.get("constant", vector(2)) if driver else None
+        if (behaviour is None) == (constant is None):
+            raise ScenarioError("behaviour: give exactly one of 'behaviour' or 'driver'")
+        stop_when = f.get("stop_when", string, "duration")
+        if stop_when not in STOP_CONDITIONS:
+            raise ScenarioError(f"stop_when: must be one of {', '.join(STOP_CONDITIONS)}")
+        return Scenario(
+            name=f.get("name", string, source.stem if source else "scenario"),
+            world_path=f.get("world", lambda v, w: _world_file(v, w, base)),
+            start=f.get("start", vector(3), None),
+            behaviour=behaviour,
+            constant_command=constant,
+            rate_hz=f.get("rate_hz", number(gt=0.0, le=1000.0), 30.0),
+            duration=f.get("duration", number(gt=0.0)),
+            stop_when=stop_when,
+            lockstep=f.get("lockstep", boolean, True),
+            reply_timeout=f.get("reply_timeout", number(gt=0.0), 2.0),
+            perturbations=f.section("perturbations", _parse_perturbations),
+            target=f.get("target", string, None),
+            goal=f.get("goal", string, None),
+            standoff=f.get("standoff", number(gt=0.0), 0.5),
+            criteria=f.get("criteria", _parse_criteria, ()),
+            source=source,
+        )
+    except ValidationError as error:
+        where = f"{source}: " if source else ""
+        raise ScenarioError(f"{where}{error}") from None
+
+
+def load_scenario(path: Path | str) -> Scenario:
+    p = Path(path)
+    try:
+        data = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise ScenarioError(f"{p}: cannot read scenario file: {error.strerror}") from None
+    except yaml.YAMLError as error:
+        raise ScenarioError(f"{p}: not valid YAML: {error}") from None
+    return parse_scenario(data, p.parent, p)
+
+
+def _object(world: World, name: str, field: str):
+    for obj in world.objects:
+        if obj.name == name:
+            return obj
+    names = ", ".join(o.name for o in world.objects) or "none"
+    raise ScenarioError(f"{field}: world '{world.name}' has no object {name!r} (objects: {names})")
+
+
+def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dict:
+    """Every metric the scenario's world and settings make meaningful, JSON-ready."""
+    t = run["t"]
+    path = np.column_stack([run["x"], run["y"], run["yaw"]])
+    frame_steps = run["frame"]
+    out: dict[str, Any] = {
+        "steps": int(len(t)),
+        "sim_time": float(t[-1] + 1.0 / scenario.rate_hz) if len(t) else 0.0,
+        "final_pose": [float(v) for v in path[-1]] if len(t) else None,
+        "commands": scoring.command_stats(t, run["v"], run["w"], int(run["missed"].sum())),
+        "replies": {
+            "frames": int(frame_steps.sum()),
+            "extra": int(np.maximum(run["replies"][frame_steps] - 1, 0).sum()),
+            "missing": int(run["missed"].sum()),
+        },
+    }
+    if world.ground.lines and len(t):
+        centreline = world.centreline()
+        out["cross_track"] = scoring.cross_track(path, centreline)
+        out["lap"] = scoring.lap_stats(t, path, centreline)
+        out["lap"]["complete"] = out["lap"]["laps"] >= 1
+    if scenario.target and len(t):
+        obj = _object(world, scenario.target, "target")
+        out["target"] = scoring.stop_distance(path, obj)
+        centre = np.asarray(getattr(obj, "position", None) or obj.pose)[:2]
+        bearing = math.atan2(centre[1] - path[-1, 1], centre[0] - path[-1, 0]) - path[-1, 2]
+        out["target"]["bearing_deg"] = abs(math.degrees(math.remainder(bearing, math.tau)))
+    if scenario.goal and len(t):
+        marker = _object(world, scenario.goal, "goal")
+        x, y, _, yaw = marker.pose
+        err = scoring.parking_error(path[-1], (x, y, yaw), scenario.standoff)
+        err["heading_error_deg"] = math.degrees(err["heading_error"])
+        out["parking"] = err
+    dropouts = []
+    for start, end in scenario.perturbations.dropouts:
+        stop = scoring.time_to_stop(t, run["v"], run["w"], start)
+        during = (t >= (stop["t_stop"] if stop["t_stop"] is not None else end)) & (t < end)
+        moving = (np.abs(run["v"]) > 0) | (np.abs(run["w"]) > 0)
+        stop["moving_after_stop"] = int(np.count_nonzero(during & moving))
+        dropouts.append(stop)
+    if dropouts:
+        out["dropouts"] = dropouts
+        delays = [d["stop_delay"] for d in dropouts]
+        out["dropout_stop_delay_max"] = None if None in delays else max(delays)
+    return out
+
+
+def check(scenario: Scenario, values: dict) -> list[dict]:
+    """One row per criterion: metric, value, rule, passed."""
+    rows = []
+    for criterion in scenario.criteria:
+        value, ok = criterion.check(values)
+        rows.append(
+            {"metric": criterion.metric, "value": value, "rule": criterion.describe(), "passed": ok}
+        )
+    return rows

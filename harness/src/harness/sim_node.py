@@ -1,0 +1,230 @@
+"""`rosrun harness sim`: the simulator as a ROS node (a thin shell around Simulation).
+
+Publishes /clock, the camera image and camera_info, the true pose (/sim/pose) and tf
+odom -> base_link; subscribes /cmd_vel.
+
+Lockstep (default): publish frame k, wait for the one Twist the behaviour answers with (up to
+~reply_timeout wall seconds; a miss is counted and the previous command held), integrate one
+step, repeat: runs are repeatable and as fast as the behaviour. Real-time (~lockstep false):
+frames at ~rate_hz of wall clock, the latest command applied.
+
+Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and perturbations) or
+~world (a world YAML or name), ~rate_hz (30), ~duration (s, 0 = forever), ~lockstep (true),
+~reply_timeout (2.0 wall s), ~record (path of an .npz trajectory log written at the end),
+~video (path of an MP4 of the camera view, optional), ~wait_for_behaviour (20 wall s).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import rospy
+import tf2_ros
+from geometry_msgs.msg import TransformStamped, Twist
+from nav_msgs.msg import Odometry
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import CameraInfo, Image
+
+from harness.ros_image import bgr_to_msg
+from harness.scenario import ScenarioError, load_scenario
+from harness.simulation import LapTracker, Perturbations, Simulation
+from harness.validation import ValidationError
+from harness.world import WorldError, load_world, resolve_world_path
+
+# Sim time spent per wall-clock wait while frames are withheld (camera dropout), so that the
+# behaviour's watchdog timers can fire and answer before the next step.
+DROPOUT_WALL_WAIT = 0.01
+
+
+def camera_info_msg(info: dict) -> CameraInfo:
+    msg = CameraInfo()
+    msg.header.frame_id = info["frame_id"]
+    msg.width, msg.height = info["width"], info["height"]
+    msg.distortion_model = info["distortion_model"]
+    msg.D, msg.K, msg.R, msg.P = info["D"], info["K"], info["R"], info["P"]
+    return msg
+
+
+class CommandInbox:
+    """Collects /cmd_vel messages from the subscriber thread for the stepping loop."""
+
+    def __init__(self):
+        self._cond = threading.Condition()
+        self._count = 0
+        self.latest = (0.0, 0.0)
+
+    def put(self, msg: Twist) -> None:
+        with self._cond:
+            self.latest = (msg.linear.x, msg.angular.z)
+            self._count += 1
+            self._cond.notify_all()
+
+    def take(self) -> int:
+        """How many commands arrived since the last take()."""
+        with self._cond:
+            count, self._count = self._count, 0
+            return count
+
+    def wait(self, timeout: float) -> bool:
+        """Wait (wall time) until at least one command is pending."""
+        with self._cond:
+            return self._cond.wait_for(lambda: self._count > 0, timeout)
+
+
+class SimNode:
+    def __init__(self):
+        scenario_path = rospy.get_param("~scenario", "")
+        if scenario_path:
+            scenario = load_scenario(scenario_path)
+            world = load_world(scenario.world_path)
+            self.rate_hz, self.duration = scenario.rate_hz, scenario.duration
+            self.lockstep, self.reply_timeout = scenario.lockstep, scenario.reply_timeout
+            start, perturbations = scenario.start, scenario.perturbations
+            self.stop_at_lap = scenario.stop_when == "lap_complete"
+        else:
+            world = load_world(resolve_world_path(rospy.get_param("~world", "course")))
+            self.rate_hz = float(rospy.get_param("~rate_hz", 30.0))
+            self.duration = float(rospy.get_param("~duration", 0.0))
+            self.lockstep = bool(rospy.get_param("~lockstep", True))
+            self.reply_timeout = float(rospy.get_param("~reply_timeout", 2.0))
+            start, perturbations, self.stop_at_lap = None, Perturbations(), False
+        if self.duration < 0 or not math.isfinite(self.duration):
+            raise ValueError(f"~duration must be >= 0 s, got {self.duration}")
+        self.sim = Simulation(world, rate_hz=self.rate_hz, start=start, perturbations=perturbations)
+        self.record_path = rospy.get_param("~record", "")
+        self.video_path = rospy.get_param("~video", "")
+        self.wait_for_behaviour = float(rospy.get_param("~wait_for_behaviour", 20.0))
+        self.laps = LapTracker(world.centreline()) if self.stop_at_lap else None
+
+        self.camera_info = camera_info_msg(self.sim.renderer.camera.camera_info_dict())
+        self.inbox = CommandInbox()
+        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=1)
+        self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1)
+        self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1)
+        self.pose_pub = rospy.Publisher("/sim/pose", Odometry, queue_size=1)
+        self.tf = tf2_ros.TransformBroadcaster()
+        self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self.inbox.put, queue_size=10)
+
+    # -- helpers ----------------------------------------------------------------------------
+
+    def _stamp(self) -> rospy.Time:
+        return rospy.Time.from_sec(self.sim.time)
+
+    def _publish_clock(self) -> None:
+        self.clock_pub.publish(Clock(clock=self._stamp()))
+
+    def _publish_frame(self, video) -> None:
+        stamp = self._stamp()
+        image = self.sim.render()
+        if video is not None:
+            video.write(image)
+        self.camera_info.header.stamp = stamp
+        self.info_pub.publish(self.camera_info)
+        self.image_pub.publish(bgr_to_msg(image, stamp, self.camera_info.header.frame_id))
+
+    def _publish_pose(self) -> None:
+        x, y, yaw = self.sim.pose
+        v, w = self.sim.robot.applied
+        odom = Odometry()
+        odom.header.stamp = self._stamp()
+        odom.header.frame_id = "odom"
+        odom.child_frame_id = "base_link"
+        odom.pose.pose.position.x, odom.pose.pose.position.y = x, y
+        odom.pose.pose.orientation.z = math.sin(yaw / 2.0)
+        odom.pose.pose.orientation.w = math.cos(yaw / 2.0)
+        odom.twist.twist.linear.x, odom.twist.twist.angular.z = v, w
+        self.pose_pub.publish(odom)
+        tf = TransformStamped()
+        tf.header, tf.child_frame_id = odom.header, "base_link"
+        tf.transform.translation.x, tf.transform.translation.y = x, y
+        tf.transform.rotation = odom.pose.pose.orientation
+        self.tf.sendTransform(tf)
+
+    def _wait_for_behaviour(self) -> None:
+        """Lockstep needs a listener on the image and a publisher on /cmd_vel before frame 0."""
+        deadline = time.monotonic() + self.wait_for_behaviour
+        while not rospy.is_shutdown() and time.monotonic() < deadline:
+            if self.image_pub.get_num_connections() and self.cmd_sub.get_num_connections():
+                time.sleep(0.2)  # let the other connections (camera_info, clock) settle too
+                return
+            time.sleep(0.02)
+        rospy.logwarn("sim: no behaviour connected to the camera and /cmd_vel; running anyway")
+
+    def _finished(self) -> bool:
+        if self.duration and self.sim.time >= self.duration - 1e-9:
+            return True
+        if self.laps is not None and self.sim.step_index % 15 == 0 and self.sim.record.pose:
+            recent = np.asarray(self.sim.record.pose[-15:])[:, :2]
+            self.laps.add(recent)
+            return self.laps.lap_complete
+        return False
+
+    # -- loops ------------------------------------------------------------------------------
+
+    def run(self) -> None:
+        video = None
+        if self.video_path:
+            cam = self.sim.renderer.camera
+            fourcc = cv2.VideoWriter_fourcc(*"mp4v")
+            video = cv2.VideoWriter(self.video_path, fourcc, self.rate_hz, (cam.width, cam.height))
+        self._publish_clock()
+        if self.lockstep:
+            self._wait_for_behaviour()
+        self.inbox.take()  # forget anything sent before the run started
+        period = 1.0 / self.rate_hz
+        next_wall = time.monotonic()
+        try:
+            while not rospy.is_shutdown() and not self._finished():
+                self._publish_clock()
+                self._publish_pose()
+                frame = self.sim.frames_flowing()
+                if frame:
+                    self._publish_frame(video)
+                missed = False
+                if self.lockstep:
+                    if frame:
+                        missed = not self.inbox.wait(self.reply_timeout)
+                    else:
+                        time.sleep(DROPOUT_WALL_WAIT)
+                else:
+                    next_wall += period
+                    time.sleep(max(0.0, next_wall - time.monotonic()))
+                replies = self.inbox.take()
+                self.sim.step(self.inbox.latest, frame=frame, replies=replies, missed=missed)
+        finally:
+            if video is not None:
+                video.release()
+            self._write_record()
+
+    def _write_record(self) -> None:
+        if not self.record_path:
+            return
+        Path(self.record_path).parent.mkdir(parents=True, exist_ok=True)
+        np.savez(self.record_path, **self.sim.record.arrays())
+        arrays = self.sim.record.arrays()
+        rospy.loginfo(
+            "sim: %d steps, %.2f s sim time, %d missed replies, record %s",
+            len(arrays["t"]),
+            self.sim.time,
+            int(arrays["missed"].sum()),
+            self.record_path,
+        )
+
+
+def main() -> None:
+    rospy.init_node("sim")
+    try:
+        node = SimNode()
+    except (ScenarioError, WorldError, ValidationError, ValueError) as error:
+        rospy.logfatal(f"sim: {error}")
+        raise SystemExit(2) from None
+    node.run()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,138 @@
+"""One simulated run, free of ROS: render the frame for step k, apply the command, record.
+
+The rospy node (sim_node.py) only moves frames and commands between this class and topics, so
+the same stepping is unit-tested without a roscore.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from harness.geometry import polyline_length
+from harness.render import Renderer
+from harness.robot import Robot
+from harness.scoring import progress
+from harness.world import World
+
+
+@dataclass(frozen=True)
+class Perturbations:
+    """What a scenario does to the world and the sensor, on top of the world file."""
+
+    gain: float | None = None  # lighting gain; None keeps the world's
+    noise_sigma: float | None = None  # grey levels; None keeps the world's
+    delay_steps: int | None = None  # actuation delay in steps; None keeps the world's
+    dropouts: tuple[tuple[float, float], ...] = ()  # [start, end) sim times without frames
+
+
+@dataclass
+class Record:
+    """Per-step log. Commands are as received (before the robot's own clamp), so a NaN or an
+    over-limit command a node sent stays visible to scoring."""
+
+    t: list[float] = field(default_factory=list)
+    pose: list[tuple[float, float, float]] = field(default_factory=list)
+    v: list[float] = field(default_factory=list)
+    w: list[float] = field(default_factory=list)
+    frame: list[bool] = field(default_factory=list)  # a camera frame was published this step
+    replies: list[int] = field(default_factory=list)  # commands received during this step
+    missed: list[bool] = field(default_factory=list)  # lockstep: no reply to this step's frame
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        pose = np.asarray(self.pose, dtype=float).reshape(-1, 3)
+        return {
+            "t": np.asarray(self.t, dtype=float),
+            "x": pose[:, 0],
+            "y": pose[:, 1],
+            "yaw": pose[:, 2],
+            "v": np.asarray(self.v, dtype=float),
+            "w": np.asarray(self.w, dtype=float),
+            "frame": np.asarray(self.frame, dtype=bool),
+            "replies": np.asarray(self.replies, dtype=int),
+            "missed": np.asarray(self.missed, dtype=bool),
+        }
+
+
+class LapTracker:
+    """Progress along a closed line, updated a chunk at a time so a lap can end a run early."""
+
+    def __init__(self, centreline: np.ndarray):
+        self.centreline = centreline
+        self.loop_length = polyline_length(centreline, True)
+        self.progress = 0.0
+        self._last: tuple[float, float] | None = None
+
+    def add(self, xy: np.ndarray) -> float:
+        points = xy if self._last is None else np.vstack([self._last, xy])
+        if len(points) >= 2:
+            self.progress += float(progress(points, self.centreline, True)[-1])
+        self._last = (float(xy[-1, 0]), float(xy[-1, 1]))
+        return self.progress
+
+    @property
+    def lap_complete(self) -> bool:
+        return abs(self.progress) >= self.loop_length
+
+
+class Simulation:
+    """Steps a world at a fixed frame rate: frame(k) -> command -> step()."""
+
+    def __init__(
+        self,
+        world: World,
+        *,
+        rate_hz: float = 30.0,
+        start: tuple[float, float, float] | None = None,
+        perturbations: Perturbations | None = None,
+    ):
+        if not (math.isfinite(rate_hz) and rate_hz > 0.0):
+            raise ValueError(f"rate_hz must be > 0, got {rate_hz}")
+        self.world = world
+        self.dt = 1.0 / rate_hz
+        self.perturbations = perturbations or Perturbations()
+        p = self.perturbations
+        self.renderer = Renderer(world, gain=p.gain, noise_sigma=p.noise_sigma)
+        delay = world.robot.delay_steps if p.delay_steps is None else p.delay_steps
+        self.robot = Robot(
+            start or world.robot.start,
+            max_v=world.robot.max_v,
+            max_w=world.robot.max_w,
+            delay_steps=delay,
+        )
+        self.step_index = 0
+        self.record = Record()
+
+    @property
+    def time(self) -> float:
+        return self.step_index * self.dt
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        return self.robot.pose
+
+    def frames_flowing(self) -> bool:
+        """False while a camera dropout covers the current time."""
+        t = self.time
+        return not any(start <= t < end for start, end in self.perturbations.dropouts)
+
+    def render(self) -> np.ndarray:
+        """The camera frame at the current step (noise keyed by the step, so reruns match)."""
+        return self.renderer.render(self.pose, frame=self.step_index)
+
+    def step(self, command: tuple[float, float], *, frame: bool, replies: int, missed: bool):
+        """Log the step that is ending, then move the robot by `command` over one period."""
+        v, w = command
+        self.record.t.append(self.time)
+        self.record.pose.append(self.pose)
+        self.record.v.append(v)
+        self.record.w.append(w)
+        self.record.frame.append(frame)
+        self.record.replies.append(replies)
+        self.record.missed.append(missed)
+        # The robot's own controller ignores a non-finite command rather than integrating NaN.
+        safe = (v, w) if math.isfinite(v) and math.isfinite(w) else (0.0, 0.0)
+        self.robot.step(*safe, self.dt)
+        self.step_index += 1

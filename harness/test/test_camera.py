@@ -1,0 +1,76 @@
+"""Camera model against numbers worked out by hand from fx, cx, height and pitch."""
+
+import math
+
+import numpy as np
+import pytest
+
+from harness.camera import Camera
+
+FX = 320.0 / math.tan(math.radians(30.0))  # 554.2563 px for 640 px and 60 deg
+
+
+def test_intrinsics_and_camera_info():
+    cam = Camera()
+    assert cam.fx == pytest.approx(554.2562584220407)
+    assert (cam.cx, cam.cy) == (320.0, 240.0)
+    info = cam.camera_info_dict()
+    assert info["K"] == pytest.approx([FX, 0, 320, 0, FX, 240, 0, 0, 1])
+    assert info["P"] == pytest.approx([FX, 0, 320, 0, 0, FX, 240, 0, 0, 0, 1, 0])
+    assert info["D"] == [0.0] * 5
+    assert info["distortion_model"] == "plumb_bob"
+    assert (info["width"], info["height"]) == (640, 480)
+    assert info["frame_id"] == "camera_rgb_optical_frame"
+
+
+def test_level_camera_projects_hand_computed_pixels():
+    cam = Camera(height_m=0.3)
+    pts = np.array([[2.0, 0.0, 0.3], [2.0, 0.5, 0.3], [2.0, 0.0, 0.0], [4.0, -1.0, 1.3]])
+    uv, depth = cam.project(pts, (0.0, 0.0, 0.0))
+    expected = [
+        (320.0, 240.0),  # straight ahead at lens height
+        (320.0 - FX * 0.5 / 2.0, 240.0),  # 0.5 m to the left -> left of centre
+        (320.0, 240.0 + FX * 0.3 / 2.0),  # on the floor -> below centre
+        (320.0 + FX * 1.0 / 4.0, 240.0 - FX * 1.0 / 4.0),  # right and above
+    ]
+    np.testing.assert_allclose(uv, expected, atol=0.5)
+    np.testing.assert_allclose(depth, [2.0, 2.0, 2.0, 4.0])
+
+
+def test_pitched_offset_camera_on_rotated_robot():
+    pitch, h, off = math.radians(20.0), 0.4, 0.1
+    cam = Camera(height_m=h, pitch=pitch, x_offset_m=off)
+    pose = (1.0, 2.0, math.pi / 2)  # facing +y: forward = +y, left = -x
+    lens = (1.0, 2.0 + off)
+    cases = [(1.5, 0.0, -h), (2.0, 0.3, -h), (3.0, -0.4, 0.5)]  # forward, left, up from lens
+    pts, expected = [], []
+    for fwd, left, up in cases:
+        pts.append([lens[0] - left, lens[1] + fwd, h + up])
+        x_opt = -left
+        y_opt = -fwd * math.sin(pitch) - up * math.cos(pitch)
+        z_opt = fwd * math.cos(pitch) - up * math.sin(pitch)
+        expected.append((320.0 + FX * x_opt / z_opt, 240.0 + FX * y_opt / z_opt))
+    uv, _ = cam.project(np.array(pts), pose)
+    np.testing.assert_allclose(uv, expected, atol=0.5)
+    # The first point is the floor 1.5 m ahead: 0.4 m below, so atan(0.4/1.5) below level.
+    assert uv[0, 1] == pytest.approx(240.0 + FX * math.tan(math.atan2(h, 1.5) - pitch), abs=0.5)
+
+
+def test_horizon_row_for_pitched_camera():
+    cam = Camera(pitch=math.radians(20.0))
+    assert cam.horizon_row() == pytest.approx(240.0 - FX * math.tan(math.radians(20.0)))
+    far, _ = cam.project(np.array([[1e6, 0.0, 0.0]]), (0.0, 0.0, 0.0))
+    assert far[0, 1] == pytest.approx(cam.horizon_row(), abs=1e-3)
+    assert Camera(pitch=math.radians(-10.0)).horizon_row() > 240.0
+
+
+def test_ground_homography_round_trip():
+    cam = Camera(pitch=math.radians(15.0), x_offset_m=0.05)
+    pose = (0.3, -0.7, 0.4)
+    floor = np.array([[1.5, 0.0], [2.0, -0.5], [3.0, 1.0]])
+    uv, _ = cam.project(np.column_stack([floor, np.zeros(3)]), pose)
+    h = cam.ground_homography(pose)
+    hom = np.column_stack([floor, np.ones(3)]) @ h.T
+    np.testing.assert_allclose(hom[:, :2] / hom[:, 2:], uv, atol=1e-9)
+    np.testing.assert_allclose(cam.pixel_to_ground(uv, pose), floor, atol=1e-9)
+    assert np.isnan(cam.pixel_to_ground([[320.0, 10.0]], pose)).all()  # above the horizon
