@@ -189,7 +189,7 @@ def load_scenario(path: Path | str) -> Scenario:
         raise ScenarioError(f"{p}: cannot read scenario file: {error.strerror}") from None
     except yaml.YAMLError as error:
         raise ScenarioError(f"{p}: not valid YAML: {error}") from None
-    return parse_scenario(data, p.parent, p)
+    return parse_scenario(data, p.parent, p.resolve())
 
 
 def _object(world: World, name: str, field: str):

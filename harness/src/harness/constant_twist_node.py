@@ -1,0 +1,30 @@
+"""A scripted behaviour for harness tests: answers every camera frame with one fixed Twist.
+
+Parameters: ~v (m/s, default 0.2), ~w (rad/s, default 0.0). Being the cheapest possible
+behaviour, it also measures the simulator's own lockstep overhead.
+"""
+
+import rospy
+from geometry_msgs.msg import Twist
+from sensor_msgs.msg import Image
+
+
+def main() -> None:
+    rospy.init_node("constant_twist")
+    command = Twist()
+    command.linear.x = float(rospy.get_param("~v", 0.2))
+    command.angular.z = float(rospy.get_param("~w", 0.0))
+    publisher = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
+    # buff_size above one 640x480 bgr8 frame, so a slow reader drops old frames, not new ones.
+    rospy.Subscriber(
+        "/camera/rgb/image_raw",
+        Image,
+        lambda _: publisher.publish(command),
+        queue_size=1,
+        buff_size=2**24,
+    )
+    rospy.spin()
+
+
+if __name__ == "__main__":
+    main()

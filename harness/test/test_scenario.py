@@ -1,0 +1,112 @@
+"""Scenario parsing, criteria and the ROS-free simulation stepper."""
+
+import math
+
+import numpy as np
+import pytest
+
+from harness.scenario import Criterion, ScenarioError, check, metrics, parse_scenario
+from harness.simulation import Perturbations, Simulation
+from harness.world import load_world, resolve_world_path
+
+MINIMAL = {"world": "course", "driver": {"constant": [0.2, 0.0]}, "duration": 2.0}
+
+
+def with_(**changes):
+    data = dict(MINIMAL)
+    for key, value in changes.items():
+        if value is None:
+            data.pop(key)
+        else:
+            data[key] = value
+    return data
+
+
+def test_minimal_scenario_gets_documented_defaults():
+    s = parse_scenario(MINIMAL)
+    assert s.world_path == resolve_world_path("course")
+    assert s.constant_command == (0.2, 0.0)
+    assert (s.rate_hz, s.lockstep, s.stop_when, s.standoff) == (30.0, True, "duration", 0.5)
+    assert s.perturbations == Perturbations()
+
+
+def test_behaviour_launch_and_args():
+    s = parse_scenario(
+        with_(driver=None, behaviour={"launch": "follow_bot follower.launch", "args": {"a": 1}})
+    )
+    assert (s.behaviour.package, s.behaviour.launch_file, s.behaviour.args) == (
+        "follow_bot",
+        "follower.launch",
+        {"a": "1"},
+    )
+
+
+@pytest.mark.parametrize(
+    ("data", "words"),
+    [
+        (with_(duration=None), "duration: missing required field"),
+        (with_(duration=-1), "duration: must be > 0"),
+        (with_(world="nowhere"), "world: no world file 'nowhere'"),
+        (with_(colour=1), "colour: unknown field"),
+        (with_(behaviour={"launch": "x y.launch"}), "give exactly one"),
+        (with_(driver=None), "give exactly one"),
+        (with_(driver=None, behaviour={"launch": "onlyone"}), "behaviour.launch: must be"),
+        (with_(perturbations={"dropout": [[2.0, 1.0]]}), "perturbations.dropout[0]: end must"),
+        (with_(perturbations={"gain": "bright"}), "perturbations.gain: must be a number"),
+        (with_(criteria={"cross_track.rms": {}}), "criteria.cross_track.rms: needs min"),
+        (with_(criteria={"x": {"maximum": 1}}), "criteria.x.maximum: unknown field"),
+        (with_(stop_when="never"), "stop_when: must be one of"),
+        ("just text", "must be a mapping"),
+    ],
+)
+def test_malformed_scenarios_name_the_field(data, words):
+    with pytest.raises(ScenarioError) as error:
+        parse_scenario(data)
+    assert words in str(error.value)
+
+
+def test_criteria_bounds_and_missing_values():
+    values = {"a": {"b": 0.5}, "flag": True, "none": None}
+    assert Criterion("a.b", maximum=1.0).check(values) == (0.5, True)
+    assert Criterion("a.b", minimum=0.6).check(values) == (0.5, False)
+    assert Criterion("flag", equals=True).check(values) == (True, True)
+    assert Criterion("none", maximum=1.0).check(values) == (None, False)
+    assert Criterion("absent.key", maximum=1.0).check(values) == (None, False)
+    assert Criterion("a.b", maximum=float("nan")).check({"a": {"b": float("nan")}})[1] is False
+
+
+def test_simulation_withholds_frames_during_dropout_and_ignores_nan_commands():
+    world = load_world(resolve_world_path("course"))
+    sim = Simulation(world, rate_hz=10.0, start=(0.0, 0.0, 0.0),
+                     perturbations=Perturbations(dropouts=((0.2, 0.4),)))  # fmt: skip
+    flowing = []
+    for k in range(6):
+        flowing.append(sim.frames_flowing())
+        command = (math.nan, 0.0) if k == 0 else (1.0, 0.0)
+        sim.step(command, frame=flowing[-1], replies=1, missed=False)
+    assert flowing == [True, True, False, False, True, True]
+    run = sim.record.arrays()
+    assert math.isnan(run["v"][0]) and run["x"][1] == 0.0  # NaN recorded, robot held still
+    assert run["x"][2] == pytest.approx(0.07)  # then 0.7 m/s (the robot's own limit) for 0.1 s
+
+
+def test_metrics_report_dropout_stop_delay_and_reply_counts():
+    world = load_world(resolve_world_path("course"))
+    scenario = parse_scenario(
+        with_(perturbations={"dropout": [[1.0, 2.0]]}, criteria={"replies.extra": {"equals": 0}})
+    )
+    t = np.arange(0, 3, 0.1)
+    v = np.where((t >= 1.15) & (t < 2.0), 0.0, 0.2)
+    run = {
+        "t": t, "x": 0.2 * t, "y": np.zeros_like(t), "yaw": np.zeros_like(t),
+        "v": v, "w": np.zeros_like(t), "frame": (t < 1.0) | (t >= 2.0),
+        "replies": np.ones_like(t, dtype=int), "missed": np.zeros_like(t, dtype=bool),
+    }  # fmt: skip
+    values = metrics(scenario, world, run)
+    assert values["dropouts"][0]["stop_delay"] == pytest.approx(0.2)
+    assert values["dropouts"][0]["moving_after_stop"] == 0
+    assert values["replies"] == {"frames": 20, "extra": 0, "missing": 0}
+    assert "cross_track" in values and "lap" in values
+    assert check(scenario, values) == [
+        {"metric": "replies.extra", "value": 0, "rule": "== 0", "passed": True}
+    ]
