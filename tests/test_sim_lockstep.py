@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-SCENARIO = Path(__file__).parent / "scenarios" / "constant_arc.yaml"
+SCENARIO = Path(__file__).resolve().parents[1] / "worlds" / "scenarios" / "constant_arc.yaml"
 
 
 def run(out: Path) -> dict:

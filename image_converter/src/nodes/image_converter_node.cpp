@@ -3,7 +3,7 @@
 #include "image_converter/ros/nodelet_main.h"
 
 int main(int argc, char** argv) {
-  image_converter::ImageConverterNodelet nodelet;
-  return image_converter::runNodelet(argc, argv, "image_converter", nodelet,
+  return image_converter::runNodelet(argc, argv, "image_converter",
+                                     std::make_unique<image_converter::ImageConverterNodelet>(),
                                      {{"image", "/camera/rgb/image_raw"}});
 }

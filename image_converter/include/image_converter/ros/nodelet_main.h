@@ -2,34 +2,54 @@
 // nodelet share every line of behaviour.
 #pragma once
 
+#include <csignal>
 #include <map>
+#include <memory>
 #include <string>
 
 #include <nodelet/nodelet.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 
 namespace image_converter {
 
+namespace detail {
+inline volatile std::sig_atomic_t& shutdownRequested() {
+  static volatile std::sig_atomic_t requested = 0;
+  return requested;
+}
+inline void requestShutdown(int) { shutdownRequested() = 1; }
+}  // namespace detail
+
 // Runs `nodelet` as node `default_name`. `default_remaps` maps a relative topic name to the
 // topic it should use when the user did not remap it on the command line (e.g. "image" ->
-// "/camera/rgb/image_raw"). Returns the process exit code: 1 when the nodelet fails to start
-// (bad parameters), 0 after a normal shutdown.
+// "/camera/rgb/image_raw"). On SIGINT the nodelet is destroyed while ROS is still up, so a
+// behaviour's destructor can still publish its final stop command. Returns the exit code: 1
+// when the nodelet fails to start (bad parameters), 0 after a normal shutdown.
 inline int runNodelet(int argc, char** argv, const std::string& default_name,
-                      nodelet::Nodelet& nodelet,
+                      std::unique_ptr<nodelet::Nodelet> nodelet,
                       const std::map<std::string, std::string>& default_remaps) {
-  ros::init(argc, argv, default_name);
+  ros::init(argc, argv, default_name, ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, detail::requestShutdown);
+  std::signal(SIGTERM, detail::requestShutdown);
   nodelet::M_string remappings = ros::names::getRemappings();
   for (const auto& [from, to] : default_remaps) {
     remappings.emplace(ros::names::resolve(from, false), to);  // keeps a user's remapping
   }
   nodelet::V_string my_argv(argv + 1, argv + argc);
   try {
-    nodelet.init(ros::this_node::getName(), remappings, my_argv);
+    nodelet->init(ros::this_node::getName(), remappings, my_argv);
   } catch (const std::exception& error) {
     ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), error.what());
     return 1;
   }
-  ros::spin();
+  ros::CallbackQueue& queue = *ros::getGlobalCallbackQueue();
+  while (ros::ok() && !detail::shutdownRequested()) {
+    queue.callAvailable(ros::WallDuration(0.05));
+  }
+  nodelet.reset();
+  ros::WallDuration(0.1).sleep();  // let the last messages leave before the connections close
+  ros::shutdown();
   return 0;
 }
 

@@ -1,0 +1,171 @@
+// Finds a coloured floor line in one horizontal band of a BGR camera frame.
+//
+// The lecture does: cvtColor(BGR->HSV) on the whole frame, inRange, zero every row outside
+// [3h/4, 3h/4 + 20), cv::moments. This detector returns the same centroid but only reads the
+// band's pixels, and classifies each one in a single pass with the exact result of
+// cvtColor + inRange (see HsvBox), accumulating the moments on the fly.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace follow_bot {
+
+// A colour in OpenCV's 8-bit HSV: H in 0..179 (degrees / 2), S and V in 0..255.
+struct HsvColor {
+  int h = 0;
+  int s = 0;
+  int v = 0;
+};
+
+// Exact, fast membership test for an HSV box: contains(b, g, r) is true exactly when
+// cv::inRange(cv::cvtColor(pixel, COLOR_BGR2HSV), lower, upper) would be 255.
+//
+// How: with max = max(b, g, r) and chroma = max - min(b, g, r), OpenCV's V is max, its S depends
+// only on (max, chroma) and rises with chroma, and its H depends only on (chroma, n) where n is
+// the hue numerator of the max channel's sector (g - b, b - r + 2 chroma or r - g + 4 chroma,
+// plus 6 chroma when negative). H rises with n from 0 to 179 except for a short tail that
+// rounds to 180 and wraps to 0, so any H interval is at most two runs of n. The box is thus
+// "chroma in a window chosen by max" and "n in one of two windows chosen by chroma". The
+// window tables are filled at construction by running cv::cvtColor itself over every
+// (max, chroma) and every (chroma, n), so they agree with the linked OpenCV by construction;
+// the constructor throws std::runtime_error if that OpenCV breaks the run structure, and the
+// unit tests check the equivalence over all 2^24 colours.
+class HsvBox {
+ public:
+  // Inclusive bounds, as for cv::inRange. An empty box (some lower > upper) matches nothing.
+  HsvBox(const HsvColor& lower, const HsvColor& upper);
+
+  bool contains(int b, int g, int r) const {
+    const int max = std::max(std::max(b, g), r);
+    const int chroma = max - std::min(std::min(b, g), r);
+    // OpenCV's sector rule: red is the max channel on ties, then green.
+    int n = max == r ? g - b : max == g ? b - r + 2 * chroma : r - g + 4 * chroma;
+    n += n < 0 ? 6 * chroma : 0;
+    return containsDecomposed(max, chroma, n);
+  }
+
+  // contains() for a pixel already reduced to its max channel, chroma and shifted hue
+  // numerator n (all as above), for callers that compute those in bulk.
+  bool containsDecomposed(int max, int chroma, int n) const {
+    const std::array<Window, 2>& hue_windows = hue_numerator_by_chroma_[chroma];
+    // Bitwise & and | keep this branch-free: callers feed it pixels near the box edges.
+    return chroma_by_value_[max].contains(chroma) &
+           (hue_windows[0].contains(n) | hue_windows[1].contains(n));
+  }
+
+  // A cheap necessary condition for contains(), for vectorised pre-screening: every pixel in
+  // the box has min_value <= max <= max_value and
+  // min_saturation * max <= 255 * chroma <= max_saturation * max (all products fit 16 bits).
+  struct Screen {
+    int min_value = 255;
+    int max_value = 0;
+    int min_saturation = 255;
+    int max_saturation = 0;
+  };
+  const Screen& screen() const { return screen_; }
+
+ private:
+  // An inclusive integer range [first, first + span]; the default one is empty.
+  struct Window {
+    int first = 1 << 20;  // beyond every value looked up, so x - first < 0
+    unsigned span = 0;
+    bool empty() const { return first == Window().first; }
+    int last() const { return first + static_cast<int>(span); }
+    // One unsigned comparison: x below first wraps to a huge value.
+    bool contains(int x) const { return static_cast<unsigned>(x - first) <= span; }
+  };
+
+  std::array<Window, 256> chroma_by_value_;
+  std::array<std::array<Window, 2>, 256> hue_numerator_by_chroma_;
+  Screen screen_;
+};
+
+// A horizontal band of rows: [floor(top_fraction * height), that + rows), clipped to the image.
+struct BandConfig {
+  double top_fraction = 0.75;
+  int rows = 20;
+};
+
+struct LineDetectorConfig {
+  // The lecture's yellow. The lecture's upper V is 255, so V >= 100 is the only V condition;
+  // it rejects dark, noisy pixels whose hue is meaningless.
+  HsvColor lower{20, 100, 100};
+  HsvColor upper{30, 255, 255};
+  BandConfig band{0.75, 20};  // the lecture's band
+  // A second band higher in the image (further ahead) for anticipating curves.
+  bool look_ahead_enabled = false;
+  BandConfig look_ahead{0.55, 20};
+  // A band is `found` with at least this many line pixels. Measurements with fewer (but > 0)
+  // pixels still carry a centroid, which is what the lecture uses.
+  int min_pixels = 30;
+  // Confidence falls once the line's mean width per row exceeds this fraction of the image
+  // width (a frame full of yellow is not a line); see BandMeasurement::confidence.
+  double max_width_fraction = 0.35;
+};
+
+// Empty when the configuration is usable, otherwise a message naming the first bad field.
+std::string validate(const LineDetectorConfig& config);
+
+struct BandMeasurement {
+  bool found = false;   // pixel_count >= min_pixels
+  int pixel_count = 0;  // line pixels in the band: the lecture's m00 / 255
+  // Centroid in full-image pixel coordinates (pixel index, as cv::moments); valid whenever
+  // pixel_count > 0, including below min_pixels.
+  double centroid_x = 0.0;
+  double centroid_y = 0.0;
+  // Horizontal offset of the centroid from width / 2; positive = line right of image centre.
+  double error_px = 0.0;
+  double error_normalised = 0.0;  // error_px / (width / 2), within [-1, 1]
+  // 0..1: (fraction of scanned rows holding line pixels) x (width sanity), where width sanity
+  // is 1 while the mean width per occupied row is <= max_width_fraction of the image width and
+  // falls linearly to 0 at the full width. A thin line through the band scores 1; a frame
+  // entirely of line colour is found but scores 0; a line ending inside the band scores low.
+  double confidence = 0.0;
+  int row_begin = 0;  // rows actually scanned: [row_begin, row_end)
+  int row_end = 0;
+};
+
+struct LineMeasurement {
+  std::string error;  // why the frame was rejected; empty when it was processed
+  int image_width = 0;
+  int image_height = 0;
+  BandMeasurement band;
+  BandMeasurement look_ahead;  // left empty unless look-ahead is enabled
+  bool ok() const { return error.empty(); }
+};
+
+class LineDetector {
+ public:
+  // Throws std::invalid_argument with the validate() message when the configuration is unusable
+  // (and std::runtime_error in the HsvBox case above). Builds the HsvBox tables: ~2 ms.
+  explicit LineDetector(const LineDetectorConfig& config = LineDetectorConfig());
+
+  // Measures the line in a CV_8UC3 BGR frame. Never throws: an empty or non-CV_8UC3 frame gives
+  // a measurement with `error` set and nothing found. A frame shorter than the band is scanned
+  // over the rows it has.
+  LineMeasurement detect(const cv::Mat& bgr) const;
+
+  // The lecture's mask: CV_8UC1 of the frame's size, 255 on line pixels inside the band(s),
+  // 0 elsewhere. Empty for frames detect() rejects.
+  cv::Mat debugMask(const cv::Mat& bgr) const;
+
+  // Draws onto the frame the line pixels (magenta), the band outlines (green; look-ahead cyan)
+  // and, as in the lecture, a filled red circle of radius 20 at the band centroid (look-ahead:
+  // a red ring). Call it on the frame `measurement` came from, before anything else is drawn.
+  // Returns false, drawing nothing, when the frame is not CV_8UC3 or not the measured size.
+  bool drawDebug(cv::Mat& bgr, const LineMeasurement& measurement) const;
+
+  const LineDetectorConfig& config() const { return config_; }
+
+ private:
+  BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band) const;
+
+  LineDetectorConfig config_;
+  HsvBox box_;
+};
+
+}  // namespace follow_bot

@@ -1,0 +1,44 @@
+// The one way a behaviour node commands the base: limits, a frame watchdog and a final stop.
+#pragma once
+
+#include <ros/ros.h>
+
+#include "follow_bot/frame_watchdog.h"
+#include "follow_bot/velocity_limiter.h"
+
+namespace follow_bot {
+
+// Publishes geometry_msgs/Twist on `cmd_vel` through a VelocityLimiter, once per call of
+// send(). A timer checks a FrameWatchdog: when frames stop for ~watchdog_timeout it publishes
+// one zero Twist and nothing more until frames return. The destructor publishes a last zero.
+//
+// Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
+// ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
+// ~watchdog_timeout (s, 0.15). Invalid values throw std::invalid_argument.
+class CommandOutput {
+ public:
+  CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  ~CommandOutput();
+  CommandOutput(const CommandOutput&) = delete;
+  CommandOutput& operator=(const CommandOutput&) = delete;
+
+  // Records that a frame arrived now (call it for every received frame, good or not).
+  void frameArrived();
+  // Limits `desired` (acceleration against the previous send, `stamp` being the frame's time)
+  // and publishes it. Returns what was published.
+  Twist2D send(const Twist2D& desired, const ros::Time& stamp);
+  // Publishes an immediate zero.
+  void stop();
+
+ private:
+  void publish(const Twist2D& command);
+  void checkWatchdog(const ros::TimerEvent&);
+
+  ros::Publisher publisher_;
+  ros::Timer timer_;
+  VelocityLimiter limiter_;
+  FrameWatchdog watchdog_;
+  ros::Time last_stamp_;
+};
+
+}  // namespace follow_bot

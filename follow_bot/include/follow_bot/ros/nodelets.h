@@ -1,0 +1,12 @@
+// Factories for the behaviour nodelets, so the thin nodes can run them without pluginlib.
+#pragma once
+
+#include <memory>
+
+#include <nodelet/nodelet.h>
+
+namespace follow_bot {
+
+std::unique_ptr<nodelet::Nodelet> makeFollowerNodelet();
+
+}  // namespace follow_bot

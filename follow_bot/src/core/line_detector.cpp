@@ -1,0 +1,356 @@
+#include "follow_bot/line_detector.h"
+
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/core/hal/intrin.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace follow_bot {
+namespace {
+
+// Largest band height accepted; keeps row arithmetic far from int overflow.
+constexpr int kMaxBandRows = 1 << 16;
+
+const cv::Scalar kLinePixelColour(255, 0, 255);  // magenta
+const cv::Scalar kBandColour(0, 255, 0);         // green
+const cv::Scalar kLookAheadColour(255, 255, 0);  // cyan
+const cv::Scalar kCentroidColour(0, 0, 255);     // red, as in the lecture
+constexpr int kCentroidRadius = 20;              // the lecture's circle
+
+// A BGR pixel with max channel 255, the given chroma and the given shifted hue numerator
+// (see HsvBox), built so HsvBox::contains computes exactly these two values for it.
+cv::Vec3b pixelWithHueNumerator(int chroma, int shifted_numerator) {
+  const int n =
+      shifted_numerator >= 5 * chroma ? shifted_numerator - 6 * chroma : shifted_numerator;
+  const int max = 255;
+  const int min = max - chroma;
+  int b, g, r;
+  if (n <= chroma) {  // red sector: n = g - b
+    r = max;
+    g = n >= 0 ? min + n : min;
+    b = n >= 0 ? min : min - n;
+  } else if (n <= 3 * chroma) {  // green sector: n - 2 chroma = b - r
+    g = max;
+    const int m = n - 2 * chroma;
+    b = m >= 0 ? min + m : min;
+    r = m >= 0 ? min : min - m;
+  } else {  // blue sector: n - 4 chroma = r - g
+    b = max;
+    const int m = n - 4 * chroma;
+    r = m >= 0 ? min + m : min;
+    g = m >= 0 ? min : min - m;
+  }
+  return cv::Vec3b(static_cast<uchar>(b), static_cast<uchar>(g), static_cast<uchar>(r));
+}
+
+bool inside(int x, int low, int high) { return low <= x && x <= high; }
+
+std::string checkColour(const char* name, const HsvColor& colour) {
+  const int channels[] = {colour.h, colour.s, colour.v};
+  const char* channel_names[] = {"h", "s", "v"};
+  for (int i = 0; i < 3; ++i) {
+    if (!inside(channels[i], 0, 255)) {
+      return std::string(name) + "." + channel_names[i] + " must be in [0, 255], got " +
+             std::to_string(channels[i]);
+    }
+  }
+  return "";
+}
+
+std::string checkBand(const char* name, const BandConfig& band) {
+  std::ostringstream message;
+  if (!std::isfinite(band.top_fraction) || band.top_fraction < 0.0 || band.top_fraction >= 1.0) {
+    message << name << ".top_fraction must be in [0, 1), got " << band.top_fraction;
+  } else if (!inside(band.rows, 1, kMaxBandRows)) {
+    message << name << ".rows must be in [1, " << kMaxBandRows << "], got " << band.rows;
+  }
+  return message.str();
+}
+
+// Why detect() cannot use this frame, or empty when it can.
+std::string checkFrame(const cv::Mat& bgr) {
+  if (bgr.empty()) return "empty image";
+  if (bgr.dims != 2) return "expected a 2-D image, got " + std::to_string(bgr.dims) + " dims";
+  if (bgr.type() != CV_8UC3) {
+    return "expected an 8-bit 3-channel BGR image (CV_8UC3, bgr8), got " +
+           cv::typeToString(bgr.type());
+  }
+  return "";
+}
+
+// Calls visit(x, is_line) for the pixels of one BGR row that might be line pixels; every
+// pixel not visited is certainly not one. Sixteen pixels at a time are screened with
+// HsvBox::Screen in SIMD (most floor pixels fail it); the survivors get the exact test, whose
+// verdict is passed on rather than branched on, because near the box edges it is a coin toss
+// the branch predictor would lose.
+template <typename Visit>
+void visitCandidates(const HsvBox& box, const uchar* bgr_row, int cols, Visit&& visit) {
+  int x = 0;
+#if CV_SIMD128
+  const HsvBox::Screen& screen = box.screen();
+  const cv::v_uint8x16 min_value = cv::v_setall_u8(static_cast<uchar>(screen.min_value));
+  const cv::v_uint8x16 max_value = cv::v_setall_u8(static_cast<uchar>(screen.max_value));
+  const cv::v_uint16x8 min_saturation =
+      cv::v_setall_u16(static_cast<ushort>(screen.min_saturation));
+  const cv::v_uint16x8 max_saturation =
+      cv::v_setall_u16(static_cast<ushort>(screen.max_saturation));
+  const cv::v_uint16x8 zero = cv::v_setzero_u16();
+  // min_saturation * max <= 255 * chroma <= max_saturation * max, on eight 16-bit lanes. The
+  // 16-bit subtractions saturate at 0, so each is 0 exactly when its inequality holds.
+  auto saturation_ok = [&](const cv::v_uint16x8& max, const cv::v_uint16x8& chroma) {
+    const cv::v_uint16x8 chroma255 = cv::v_shl<8>(chroma) - chroma;
+    return ((cv::v_mul_wrap(max, min_saturation) - chroma255) |
+            (chroma255 - cv::v_mul_wrap(max, max_saturation))) == zero;
+  };
+  // HsvBox's shifted hue numerator on eight 16-bit lanes, with the same sector rule.
+  auto hue_numerator = [](const cv::v_uint16x8& b, const cv::v_uint16x8& g, const cv::v_uint16x8& r,
+                          const cv::v_uint16x8& max, const cv::v_uint16x8& chroma) {
+    const cv::v_int16x8 sb = cv::v_reinterpret_as_s16(b), sg = cv::v_reinterpret_as_s16(g),
+                        sr = cv::v_reinterpret_as_s16(r), smax = cv::v_reinterpret_as_s16(max);
+    const cv::v_int16x8 c2 = cv::v_shl<1>(cv::v_reinterpret_as_s16(chroma));
+    const cv::v_int16x8 c4 = c2 + c2;
+    const cv::v_int16x8 n =
+        cv::v_select(smax == sr, sg - sb, cv::v_select(smax == sg, sb - sr + c2, sr - sg + c4));
+    return n + ((n < cv::v_setzero_s16()) & (c4 + c2));
+  };
+  for (; x + 16 <= cols; x += 16) {
+    cv::v_uint8x16 b, g, r;
+    cv::v_load_deinterleave(bgr_row + 3 * x, b, g, r);
+    const cv::v_uint8x16 max = cv::v_max(cv::v_max(b, g), r);
+    const cv::v_uint8x16 chroma = max - cv::v_min(cv::v_min(b, g), r);
+    cv::v_uint16x8 max_low, max_high, chroma_low, chroma_high;
+    cv::v_expand(max, max_low, max_high);
+    cv::v_expand(chroma, chroma_low, chroma_high);
+    const cv::v_uint8x16 passed =
+        (cv::v_min(cv::v_max(max, min_value), max_value) == max) &
+        cv::v_pack(saturation_ok(max_low, chroma_low), saturation_ok(max_high, chroma_high));
+    unsigned bits = cv::v_signmask(passed);
+    if (bits == 0) continue;
+    // Survivors: finish the decomposition for all sixteen lanes at once.
+    cv::v_uint16x8 b_low, b_high, g_low, g_high, r_low, r_high;
+    cv::v_expand(b, b_low, b_high);
+    cv::v_expand(g, g_low, g_high);
+    cv::v_expand(r, r_low, r_high);
+    alignas(16) uchar max_lanes[16];
+    alignas(16) uchar chroma_lanes[16];
+    alignas(16) short numerator_lanes[16];
+    cv::v_store_aligned(max_lanes, max);
+    cv::v_store_aligned(chroma_lanes, chroma);
+    cv::v_store_aligned(numerator_lanes, hue_numerator(b_low, g_low, r_low, max_low, chroma_low));
+    cv::v_store_aligned(numerator_lanes + 8,
+                        hue_numerator(b_high, g_high, r_high, max_high, chroma_high));
+    for (; bits != 0; bits &= bits - 1) {
+      const int lane = ::trailingZeros32(bits);
+      visit(x + lane,
+            box.containsDecomposed(max_lanes[lane], chroma_lanes[lane], numerator_lanes[lane]));
+    }
+  }
+#endif
+  for (const uchar* pixel = bgr_row + 3 * x; x < cols; ++x, pixel += 3) {
+    visit(x, box.contains(pixel[0], pixel[1], pixel[2]));
+  }
+}
+
+const LineDetectorConfig& validated(const LineDetectorConfig& config) {
+  const std::string error = validate(config);
+  if (!error.empty()) throw std::invalid_argument("LineDetector: " + error);
+  return config;
+}
+
+void bandRows(const BandConfig& band, int height, int* row_begin, int* row_end) {
+  *row_begin = std::min(static_cast<int>(std::floor(band.top_fraction * height)), height);
+  *row_end = std::min(*row_begin + band.rows, height);
+}
+
+void drawBand(cv::Mat& bgr, const BandMeasurement& band, const cv::Scalar& outline,
+              int centroid_thickness) {
+  if (band.row_end > band.row_begin) {
+    cv::rectangle(bgr, cv::Point(0, band.row_begin), cv::Point(bgr.cols - 1, band.row_end - 1),
+                  outline, 1);
+  }
+  if (band.pixel_count > 0) {
+    cv::circle(bgr, cv::Point(cvRound(band.centroid_x), cvRound(band.centroid_y)), kCentroidRadius,
+               kCentroidColour, centroid_thickness);
+  }
+}
+
+}  // namespace
+
+HsvBox::HsvBox(const HsvColor& lower, const HsvColor& upper) {
+  // Appends x, visited in increasing order, to runs[0..max_runs): extends the last run when x
+  // follows it, otherwise opens a new run.
+  auto add_to_runs = [](Window* runs, int max_runs, int& runs_used, int x) {
+    Window* last = runs_used > 0 ? &runs[runs_used - 1] : nullptr;
+    if (last != nullptr && x == last->first + static_cast<int>(last->span) + 1) {
+      ++last->span;
+      return;
+    }
+    if (runs_used == max_runs) {
+      throw std::runtime_error(
+          "HsvBox: this OpenCV's BGR->HSV conversion is not monotone as assumed, so no exact "
+          "classifier can be built");
+    }
+    runs[runs_used++] = Window{x, 0};
+  };
+
+  // S and V: one pixel per (max, chroma), max = row, chroma = column.
+  cv::Mat value_chroma_pixels(256, 256, CV_8UC3, cv::Scalar::all(0));
+  for (int max = 0; max < 256; ++max) {
+    for (int chroma = 0; chroma <= max; ++chroma) {
+      const auto min = static_cast<uchar>(max - chroma);
+      value_chroma_pixels.at<cv::Vec3b>(max, chroma) = cv::Vec3b(min, min, static_cast<uchar>(max));
+    }
+  }
+  cv::Mat hsv;
+  cv::cvtColor(value_chroma_pixels, hsv, cv::COLOR_BGR2HSV);
+  for (int max = 0; max < 256; ++max) {
+    int runs_used = 0;
+    for (int chroma = 0; chroma <= max; ++chroma) {
+      const cv::Vec3b& pixel = hsv.at<cv::Vec3b>(max, chroma);
+      if (inside(pixel[1], lower.s, upper.s) && inside(pixel[2], lower.v, upper.v)) {
+        add_to_runs(&chroma_by_value_[max], 1, runs_used, chroma);
+      }
+    }
+  }
+  // The screen's bounds are the extremes of the exact windows, so it never rejects a member.
+  for (int max = 0; max < 256; ++max) {
+    const Window& window = chroma_by_value_[max];
+    if (window.empty()) continue;
+    screen_.min_value = std::min(screen_.min_value, max);
+    screen_.max_value = std::max(screen_.max_value, max);
+    if (max == 0) continue;  // chroma 0: both saturation products are 0
+    screen_.min_saturation = std::min(screen_.min_saturation, 255 * window.first / max);
+    screen_.max_saturation =
+        std::max(screen_.max_saturation, (255 * window.last() + max - 1) / max);
+  }
+
+  // H: one pixel per (chroma, shifted numerator in [0, 6 chroma)), chroma = row. Grey
+  // (chroma 0) has the single numerator 0.
+  cv::Mat hue_pixels(256, 6 * 255, CV_8UC3, cv::Scalar::all(0));
+  for (int chroma = 0; chroma < 256; ++chroma) {
+    for (int n = 0; n < std::max(1, 6 * chroma); ++n) {
+      hue_pixels.at<cv::Vec3b>(chroma, n) = pixelWithHueNumerator(chroma, n);
+    }
+  }
+  cv::cvtColor(hue_pixels, hsv, cv::COLOR_BGR2HSV);
+  for (int chroma = 0; chroma < 256; ++chroma) {
+    int runs_used = 0;
+    for (int n = 0; n < std::max(1, 6 * chroma); ++n) {
+      if (inside(hsv.at<cv::Vec3b>(chroma, n)[0], lower.h, upper.h)) {
+        add_to_runs(hue_numerator_by_chroma_[chroma].data(), 2, runs_used, n);
+      }
+    }
+  }
+}
+
+std::string validate(const LineDetectorConfig& config) {
+  for (const std::string& error :
+       {checkColour("lower", config.lower), checkColour("upper", config.upper),
+        checkBand("band", config.band), checkBand("look_ahead", config.look_ahead)}) {
+    if (!error.empty()) return error;
+  }
+  std::ostringstream message;
+  const int lower[] = {config.lower.h, config.lower.s, config.lower.v};
+  const int upper[] = {config.upper.h, config.upper.s, config.upper.v};
+  const char* names[] = {"h", "s", "v"};
+  for (int i = 0; i < 3; ++i) {
+    if (lower[i] > upper[i]) {
+      message << "lower." << names[i] << " (" << lower[i] << ") must be <= upper." << names[i]
+              << " (" << upper[i] << "); the box would match nothing";
+      return message.str();
+    }
+  }
+  if (config.min_pixels < 1) {
+    message << "min_pixels must be >= 1, got " << config.min_pixels;
+  } else if (!std::isfinite(config.max_width_fraction) || config.max_width_fraction <= 0.0 ||
+             config.max_width_fraction > 1.0) {
+    message << "max_width_fraction must be in (0, 1], got " << config.max_width_fraction;
+  }
+  return message.str();
+}
+
+LineDetector::LineDetector(const LineDetectorConfig& config)
+    : config_(validated(config)), box_(config.lower, config.upper) {}
+
+LineMeasurement LineDetector::detect(const cv::Mat& bgr) const {
+  LineMeasurement measurement;
+  measurement.error = checkFrame(bgr);
+  if (!measurement.ok()) return measurement;
+  measurement.image_width = bgr.cols;
+  measurement.image_height = bgr.rows;
+  measurement.band = measureBand(bgr, config_.band);
+  if (config_.look_ahead_enabled) measurement.look_ahead = measureBand(bgr, config_.look_ahead);
+  return measurement;
+}
+
+BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& band) const {
+  BandMeasurement result;
+  bandRows(band, bgr.rows, &result.row_begin, &result.row_end);
+
+  // The lecture's moments, divided by 255: m00 = count, m10 = sum_x, m01 = sum_y.
+  std::int64_t count = 0, sum_x = 0, sum_y = 0;
+  int occupied_rows = 0;
+  for (int y = result.row_begin; y < result.row_end; ++y) {
+    int row_count = 0;
+    std::int64_t row_sum_x = 0;
+    visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols, [&](int x, bool is_line) {
+      row_count += is_line ? 1 : 0;
+      row_sum_x += is_line ? x : 0;
+    });
+    count += row_count;
+    sum_x += row_sum_x;
+    sum_y += static_cast<std::int64_t>(row_count) * y;
+    occupied_rows += row_count > 0 ? 1 : 0;
+  }
+  result.pixel_count = static_cast<int>(count);
+  if (count == 0) return result;
+
+  result.found = count >= config_.min_pixels;
+  result.centroid_x = static_cast<double>(sum_x) / count;
+  result.centroid_y = static_cast<double>(sum_y) / count;
+  const double half_width = bgr.cols / 2.0;
+  result.error_px = result.centroid_x - half_width;
+  result.error_normalised = result.error_px / half_width;
+
+  const double row_coverage =
+      static_cast<double>(occupied_rows) / (result.row_end - result.row_begin);
+  const double width_fraction = static_cast<double>(count) / occupied_rows / bgr.cols;
+  const double width_sanity = width_fraction <= config_.max_width_fraction
+                                  ? 1.0
+                                  : (1.0 - width_fraction) / (1.0 - config_.max_width_fraction);
+  result.confidence = row_coverage * width_sanity;
+  return result;
+}
+
+cv::Mat LineDetector::debugMask(const cv::Mat& bgr) const {
+  if (!checkFrame(bgr).empty()) return cv::Mat();
+  cv::Mat mask(bgr.size(), CV_8UC1, cv::Scalar::all(0));
+  auto mark_band = [&](const BandConfig& band) {
+    int row_begin, row_end;
+    bandRows(band, bgr.rows, &row_begin, &row_end);
+    for (int y = row_begin; y < row_end; ++y) {
+      uchar* mask_row = mask.ptr<uchar>(y);
+      visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols,
+                      [&](int x, bool is_line) { mask_row[x] = is_line ? 255 : 0; });
+    }
+  };
+  mark_band(config_.band);
+  if (config_.look_ahead_enabled) mark_band(config_.look_ahead);
+  return mask;
+}
+
+bool LineDetector::drawDebug(cv::Mat& bgr, const LineMeasurement& measurement) const {
+  if (!checkFrame(bgr).empty() || bgr.cols != measurement.image_width ||
+      bgr.rows != measurement.image_height) {
+    return false;
+  }
+  bgr.setTo(kLinePixelColour, debugMask(bgr));
+  drawBand(bgr, measurement.band, kBandColour, cv::FILLED);
+  if (config_.look_ahead_enabled) drawBand(bgr, measurement.look_ahead, kLookAheadColour, 2);
+  return true;
+}
+
+}  // namespace follow_bot

@@ -1,0 +1,8 @@
+// `rosrun follow_bot follower`: the Follower nodelet in a process of its own.
+#include "follow_bot/ros/nodelets.h"
+#include "image_converter/ros/nodelet_main.h"
+
+int main(int argc, char** argv) {
+  return image_converter::runNodelet(argc, argv, "follower", follow_bot::makeFollowerNodelet(),
+                                     {{"image", "/camera/rgb/image_raw"}, {"cmd_vel", "/cmd_vel"}});
+}

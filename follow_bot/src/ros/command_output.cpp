@@ -1,0 +1,64 @@
+#include "follow_bot/ros/command_output.h"
+
+#include <cmath>
+
+#include <geometry_msgs/Twist.h>
+
+#include "follow_bot/ros/params.h"
+
+namespace follow_bot {
+
+namespace {
+VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh) {
+  VelocityLimiterConfig config;
+  config.max_linear = positiveParam(pnh, "limit_linear", config.max_linear);
+  config.max_angular = positiveParam(pnh, "limit_angular", config.max_angular);
+  config.max_linear_accel = positiveParam(pnh, "limit_linear_accel", config.max_linear_accel);
+  config.max_angular_accel = positiveParam(pnh, "limit_angular_accel", config.max_angular_accel);
+  return config;
+}
+}  // namespace
+
+CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh)
+    : limiter_(readLimits(pnh)), watchdog_(positiveParam(pnh, "watchdog_timeout", 0.15)) {
+  publisher_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
+  // Four checks per timeout bound the stop delay to 1.25 timeouts (on sim or wall time).
+  timer_ =
+      nh.createTimer(ros::Duration(watchdog_.timeout() / 4.0), &CommandOutput::checkWatchdog, this);
+}
+
+CommandOutput::~CommandOutput() {
+  timer_.stop();
+  stop();
+}
+
+void CommandOutput::frameArrived() { watchdog_.frameArrived(ros::Time::now().toSec()); }
+
+Twist2D CommandOutput::send(const Twist2D& desired, const ros::Time& stamp) {
+  const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
+  last_stamp_ = stamp;
+  const Twist2D command = limiter_.limit(desired, dt);
+  publish(command);
+  return command;
+}
+
+void CommandOutput::stop() {
+  last_stamp_ = ros::Time();
+  publish(limiter_.stop());
+}
+
+void CommandOutput::publish(const Twist2D& command) {
+  geometry_msgs::Twist msg;
+  msg.linear.x = command.linear;
+  msg.angular.z = command.angular;
+  publisher_.publish(msg);
+}
+
+void CommandOutput::checkWatchdog(const ros::TimerEvent&) {
+  if (watchdog_.shouldSendStop(ros::Time::now().toSec())) {
+    ROS_WARN("no camera frame for %.2f s: stopping the robot", watchdog_.timeout());
+    stop();
+  }
+}
+
+}  // namespace follow_bot

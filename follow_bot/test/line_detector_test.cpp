@@ -1,0 +1,351 @@
+#include "follow_bot/line_detector.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <vector>
+
+namespace follow_bot {
+namespace {
+
+const cv::Scalar kGrey(110, 115, 120);
+const cv::Scalar kYellow(0, 220, 230);  // BGR; OpenCV HSV (29, 255, 230)
+const HsvColor kLectureLower{20, 100, 100};
+const HsvColor kLectureUpper{30, 255, 255};
+
+cv::Mat greyFrame(int rows = 480, int cols = 640) { return cv::Mat(rows, cols, CV_8UC3, kGrey); }
+
+// Paints columns [x, x + width) of rows [top, bottom) yellow.
+void paintStripe(cv::Mat& frame, int x, int width, int top, int bottom) {
+  frame(cv::Range(top, bottom), cv::Range(x, x + width)).setTo(kYellow);
+}
+
+// The lecture's mask: full-frame HSV, inRange, every row outside the band zeroed.
+cv::Mat referenceMask(const cv::Mat& bgr, const LineDetectorConfig& config) {
+  cv::Mat hsv, mask;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  cv::inRange(hsv, cv::Scalar(config.lower.h, config.lower.s, config.lower.v),
+              cv::Scalar(config.upper.h, config.upper.s, config.upper.v), mask);
+  const int top = static_cast<int>(config.band.top_fraction * bgr.rows);
+  const int bottom = std::min(top + config.band.rows, bgr.rows);
+  for (int y = 0; y < bgr.rows; ++y) {
+    if (y < top || y >= bottom) mask.row(y).setTo(0);
+  }
+  return mask;
+}
+
+// Bound sets for the equivalence tests: the lecture's, and edge cases of every channel.
+std::vector<std::pair<HsvColor, HsvColor>> boundSets() {
+  return {
+      {kLectureLower, kLectureUpper},     {{0, 0, 0}, {179, 255, 255}},  // everything
+      {{0, 0, 0}, {0, 255, 255}},          // H = 0 only, which includes hues rounding to 180
+      {{179, 0, 0}, {179, 255, 255}},      // H = 179 only
+      {{0, 0, 0}, {10, 255, 255}},         // red, low side
+      {{170, 50, 0}, {179, 255, 255}},     // red, high side
+      {{0, 0, 0}, {179, 0, 255}},          // greys only (S = 0)
+      {{0, 255, 255}, {179, 255, 255}},    // fully saturated and bright only
+      {{0, 0, 0}, {179, 255, 0}},          // black only (V = 0)
+      {{150, 255, 255}, {150, 255, 255}},  // a single HSV point at a sector boundary
+      {{1, 1, 1}, {178, 254, 254}},        // everything but the extremes
+      {{90, 60, 40}, {130, 200, 220}},     // blue, inner bounds on S and V
+      {{0, 0, 0}, {255, 255, 255}},        // H upper above 179 behaves as 179
+  };
+}
+
+LineDetectorConfig withBounds(const HsvColor& lower, const HsvColor& upper) {
+  LineDetectorConfig config;
+  config.lower = lower;
+  config.upper = upper;
+  return config;
+}
+
+std::string describe(const HsvColor& lower, const HsvColor& upper) {
+  return "H " + std::to_string(lower.h) + "-" + std::to_string(upper.h) + " S " +
+         std::to_string(lower.s) + "-" + std::to_string(upper.s) + " V " + std::to_string(lower.v) +
+         "-" + std::to_string(upper.v);
+}
+
+TEST(LineDetector, DefaultsAreTheLecture) {
+  const LineDetectorConfig config;
+  EXPECT_EQ(validate(config), "");
+  EXPECT_EQ(config.lower.h, 20);
+  EXPECT_EQ(config.lower.s, 100);
+  EXPECT_EQ(config.lower.v, 100);
+  EXPECT_EQ(config.upper.h, 30);
+  EXPECT_DOUBLE_EQ(config.band.top_fraction, 0.75);
+  EXPECT_EQ(config.band.rows, 20);
+  EXPECT_FALSE(config.look_ahead_enabled);
+}
+
+TEST(LineDetector, FindsAStripeAtItsColumn) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 500, 11, 0, 480);  // columns 500..510
+  const LineMeasurement m = LineDetector().detect(frame);
+  ASSERT_TRUE(m.ok()) << m.error;
+  EXPECT_EQ(m.image_width, 640);
+  EXPECT_EQ(m.image_height, 480);
+  EXPECT_TRUE(m.band.found);
+  EXPECT_EQ(m.band.pixel_count, 11 * 20);
+  EXPECT_NEAR(m.band.centroid_x, 505.0, 0.5);
+  EXPECT_NEAR(m.band.centroid_y, 369.5, 0.5);
+  EXPECT_NEAR(m.band.error_px, 185.0, 0.5);
+  EXPECT_NEAR(m.band.error_normalised, 185.0 / 320.0, 1e-3);
+  EXPECT_DOUBLE_EQ(m.band.confidence, 1.0);
+  EXPECT_EQ(m.band.row_begin, 360);
+  EXPECT_EQ(m.band.row_end, 380);
+}
+
+TEST(LineDetector, FindsAnAntiAliasedLineWithinHalfAPixel) {
+  for (double x : {100.25, 319.5, 320.0, 421.75}) {
+    cv::Mat frame = greyFrame();
+    // Drawn with 4 fractional bits so the line's centre is at x exactly.
+    const int fixed_x = cvRound(x * 16);
+    cv::line(frame, cv::Point(fixed_x, 0), cv::Point(fixed_x, 479 * 16), kYellow, 9, cv::LINE_AA,
+             4);
+    const BandMeasurement band = LineDetector().detect(frame).band;
+    ASSERT_TRUE(band.found);
+    EXPECT_NEAR(band.centroid_x, x, 0.5) << x;
+  }
+}
+
+TEST(LineDetector, IgnoresLineColourOutsideTheBand) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 0, 640, 0, 360);    // everything above the band, up to row 359
+  paintStripe(frame, 0, 640, 380, 480);  // everything below, from row 380
+  paintStripe(frame, 100, 10, 360, 380);
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_EQ(band.pixel_count, 200);
+  EXPECT_NEAR(band.centroid_x, 104.5, 1e-9);
+  EXPECT_NEAR(band.centroid_y, 369.5, 1e-9);
+}
+
+TEST(LineDetector, ReportsNothingWithoutLineColour) {
+  cv::Mat frame = greyFrame();
+  cv::RNG rng(3);
+  cv::Mat noise(frame.size(), CV_8UC3);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 40);
+  frame += noise;
+  const LineMeasurement m = LineDetector().detect(frame);
+  ASSERT_TRUE(m.ok());
+  EXPECT_FALSE(m.band.found);
+  EXPECT_EQ(m.band.pixel_count, 0);
+  EXPECT_EQ(m.band.confidence, 0.0);
+  EXPECT_EQ(m.band.error_normalised, 0.0);
+}
+
+TEST(LineDetector, AnAllYellowFrameIsFoundWithZeroConfidence) {
+  cv::Mat frame(480, 640, CV_8UC3, kYellow);
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_TRUE(band.found);
+  EXPECT_EQ(band.pixel_count, 640 * 20);
+  EXPECT_NEAR(band.error_px, -0.5, 1e-9);  // pixel-index centroid 319.5
+  EXPECT_EQ(band.confidence, 0.0);
+}
+
+TEST(LineDetector, ConfidenceFallsForShortAndWideLines) {
+  LineDetector detector;
+  cv::Mat ends_in_band = greyFrame();
+  paintStripe(ends_in_band, 300, 20, 375, 480);  // only the band's last 5 rows
+  EXPECT_DOUBLE_EQ(detector.detect(ends_in_band).band.confidence, 0.25);
+
+  cv::Mat wide = greyFrame();
+  paintStripe(wide, 0, 416, 0, 480);  // 65% of the width
+  // Width sanity (1 - 0.65) / (1 - 0.35) with the default max_width_fraction.
+  EXPECT_NEAR(detector.detect(wide).band.confidence, 0.35 / 0.65, 1e-9);
+}
+
+TEST(LineDetector, FewPixelsGiveACentroidButNotFound) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 200, 1, 360, 365);  // 5 pixels, below min_pixels = 30
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_FALSE(band.found);
+  EXPECT_EQ(band.pixel_count, 5);
+  EXPECT_DOUBLE_EQ(band.centroid_x, 200.0);
+  EXPECT_DOUBLE_EQ(band.centroid_y, 362.0);
+}
+
+TEST(LineDetector, ClipsTheBandToSmallFrames) {
+  LineDetector detector;
+  cv::Mat tiny(10, 12, CV_8UC3, kYellow);  // band rows [7, 27) clip to [7, 10)
+  BandMeasurement band = detector.detect(tiny).band;
+  EXPECT_EQ(band.row_begin, 7);
+  EXPECT_EQ(band.row_end, 10);
+  EXPECT_EQ(band.pixel_count, 36);
+  EXPECT_TRUE(band.found);
+  EXPECT_DOUBLE_EQ(band.centroid_y, 8.0);
+
+  cv::Mat one_pixel(1, 1, CV_8UC3, kYellow);
+  band = detector.detect(one_pixel).band;
+  EXPECT_EQ(band.row_begin, 0);
+  EXPECT_EQ(band.row_end, 1);
+  EXPECT_EQ(band.pixel_count, 1);
+  EXPECT_FALSE(band.found);
+}
+
+TEST(LineDetector, RejectsEmptyAndNonBgr8FramesWithoutThrowing) {
+  LineDetector detector;
+  LineMeasurement m;
+  EXPECT_NO_THROW(m = detector.detect(cv::Mat()));
+  EXPECT_FALSE(m.ok());
+  EXPECT_EQ(m.error, "empty image");
+  EXPECT_FALSE(m.band.found);
+
+  for (int type : {CV_8UC1, CV_8UC4, CV_16UC3, CV_32FC3, CV_8SC3}) {
+    const cv::Mat frame(48, 64, type, cv::Scalar::all(200));
+    EXPECT_NO_THROW(m = detector.detect(frame));
+    EXPECT_FALSE(m.ok()) << type;
+    EXPECT_NE(m.error.find("CV_8UC3"), std::string::npos) << m.error;
+    EXPECT_FALSE(m.band.found);
+    EXPECT_TRUE(detector.debugMask(frame).empty());
+  }
+}
+
+TEST(LineDetector, ReadsRegionsOfInterestWithTheirStride) {
+  cv::Mat big = greyFrame(600, 800);
+  paintStripe(big, 150 + 400, 10, 0, 600);  // column 400 of the ROI below
+  const cv::Mat roi = big(cv::Rect(150, 60, 640, 480));
+  ASSERT_FALSE(roi.isContinuous());
+  const BandMeasurement band = LineDetector().detect(roi).band;
+  EXPECT_EQ(band.pixel_count, 200);
+  EXPECT_NEAR(band.centroid_x, 404.5, 1e-9);
+}
+
+TEST(LineDetector, MeasuresTheLookAheadBandWhenEnabled) {
+  LineDetectorConfig config;
+  config.look_ahead_enabled = true;
+  config.look_ahead = {0.5, 10};  // rows [240, 250)
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 400, 10, 240, 250);
+  paintStripe(frame, 300, 10, 360, 380);
+  const LineMeasurement m = LineDetector(config).detect(frame);
+  EXPECT_NEAR(m.band.centroid_x, 304.5, 1e-9);
+  EXPECT_TRUE(m.look_ahead.found);
+  EXPECT_EQ(m.look_ahead.row_begin, 240);
+  EXPECT_EQ(m.look_ahead.row_end, 250);
+  EXPECT_NEAR(m.look_ahead.centroid_x, 404.5, 1e-9);
+  EXPECT_NEAR(m.look_ahead.centroid_y, 244.5, 1e-9);
+
+  const LineMeasurement without = LineDetector().detect(frame);
+  EXPECT_FALSE(without.look_ahead.found);
+  EXPECT_EQ(without.look_ahead.pixel_count, 0);
+}
+
+// Every one of the 2^24 colours, through the detector's vectorised path, against
+// cv::cvtColor + cv::inRange.
+TEST(LineDetector, MatchesCvtColorAndInRangeOnEveryColour) {
+  cv::Mat all_colours(4096, 4096, CV_8UC3);
+  for (int i = 0; i < (1 << 24); ++i) {
+    all_colours.at<cv::Vec3b>(i >> 12, i & 4095) =
+        cv::Vec3b(i & 255, (i >> 8) & 255, (i >> 16) & 255);
+  }
+  cv::Mat hsv;
+  cv::cvtColor(all_colours, hsv, cv::COLOR_BGR2HSV);
+  for (const auto& [lower, upper] : boundSets()) {
+    LineDetectorConfig config = withBounds(lower, upper);
+    config.band = {0.0, 4096};
+    cv::Mat expected;
+    cv::inRange(hsv, cv::Scalar(lower.h, lower.s, lower.v), cv::Scalar(upper.h, upper.s, upper.v),
+                expected);
+    const cv::Mat mask = LineDetector(config).debugMask(all_colours);
+    EXPECT_EQ(cv::countNonZero(mask != expected), 0) << describe(lower, upper);
+  }
+}
+
+// The same through HsvBox::contains, the scalar path, on random pixels.
+TEST(HsvBox, MatchesCvtColorAndInRangeOnRandomPixels) {
+  cv::Mat pixels(1, 200000, CV_8UC3);
+  cv::RNG(11).fill(pixels, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat hsv;
+  cv::cvtColor(pixels, hsv, cv::COLOR_BGR2HSV);
+  for (const auto& [lower, upper] : boundSets()) {
+    const HsvBox box(lower, upper);
+    cv::Mat expected;
+    cv::inRange(hsv, cv::Scalar(lower.h, lower.s, lower.v), cv::Scalar(upper.h, upper.s, upper.v),
+                expected);
+    int mismatches = 0;
+    for (int i = 0; i < pixels.cols; ++i) {
+      const cv::Vec3b& p = pixels.at<cv::Vec3b>(0, i);
+      mismatches += box.contains(p[0], p[1], p[2]) != (expected.at<uchar>(0, i) != 0);
+    }
+    EXPECT_EQ(mismatches, 0) << describe(lower, upper);
+  }
+}
+
+// Random frames of several sizes (widths not a multiple of 16 exercise the scalar tail):
+// the band mask and the moments equal the lecture's pipeline.
+TEST(LineDetector, MatchesTheLecturePipelineOnRandomFrames) {
+  cv::RNG rng(5);
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(333, 101), cv::Size(17, 9)}) {
+    for (const auto& [lower, upper] : boundSets()) {
+      cv::Mat frame(size, CV_8UC3);
+      rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+      const LineDetectorConfig config = withBounds(lower, upper);
+      const LineDetector detector(config);
+      const cv::Mat expected = referenceMask(frame, config);
+      EXPECT_EQ(cv::countNonZero(detector.debugMask(frame) != expected), 0)
+          << describe(lower, upper) << " " << size;
+
+      const cv::Moments moments = cv::moments(expected);
+      const BandMeasurement band = detector.detect(frame).band;
+      EXPECT_EQ(band.pixel_count, static_cast<int>(moments.m00 / 255));
+      if (moments.m00 > 0) {
+        EXPECT_DOUBLE_EQ(band.centroid_x, moments.m10 / moments.m00);
+        EXPECT_DOUBLE_EQ(band.centroid_y, moments.m01 / moments.m00);
+      }
+    }
+  }
+}
+
+TEST(LineDetector, ValidatesItsConfiguration) {
+  auto error_for = [](auto change) {
+    LineDetectorConfig config;
+    change(config);
+    return validate(config);
+  };
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.lower.s = -1; }),
+            "lower.s must be in [0, 255], got -1");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.upper.v = 256; }),
+            "upper.v must be in [0, 255], got 256");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.lower.h = 40; }),
+            "lower.h (40) must be <= upper.h (30); the box would match nothing");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.band.top_fraction = 1.0; }),
+            "band.top_fraction must be in [0, 1), got 1");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.look_ahead.rows = 0; }),
+            "look_ahead.rows must be in [1, 65536], got 0");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.min_pixels = 0; }),
+            "min_pixels must be >= 1, got 0");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.max_width_fraction = 0.0; }),
+            "max_width_fraction must be in (0, 1], got 0");
+  LineDetectorConfig bad;
+  bad.band.rows = -5;
+  EXPECT_THROW(LineDetector{bad}, std::invalid_argument);
+}
+
+TEST(LineDetector, DrawsBandMaskAndCentroid) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 300, 10, 0, 480);
+  const LineDetector detector;
+  const LineMeasurement m = detector.detect(frame);
+  cv::Mat drawn = frame.clone();
+  ASSERT_TRUE(detector.drawDebug(drawn, m));
+  const cv::Vec3b red(0, 0, 255), green(0, 255, 0), magenta(255, 0, 255);
+  EXPECT_EQ(drawn.at<cv::Vec3b>(370, 304), red);  // the filled centroid circle
+  EXPECT_EQ(drawn.at<cv::Vec3b>(370, 304 + 19), red);
+  EXPECT_EQ(drawn.at<cv::Vec3b>(360, 100), green);                          // band outline, top
+  EXPECT_EQ(drawn.at<cv::Vec3b>(379, 600), green);                          // and bottom
+  EXPECT_EQ(drawn.at<cv::Vec3b>(200, 305), frame.at<cv::Vec3b>(200, 305));  // off-band stripe
+  cv::Mat far_from_circle = frame.clone();
+  paintStripe(far_from_circle, 600, 2, 360, 380);
+  cv::Mat drawn_far = far_from_circle.clone();
+  ASSERT_TRUE(detector.drawDebug(drawn_far, detector.detect(far_from_circle)));
+  EXPECT_EQ(drawn_far.at<cv::Vec3b>(370, 601), magenta);  // a line pixel of the band
+
+  cv::Mat other_size = greyFrame(240, 320);
+  EXPECT_FALSE(detector.drawDebug(other_size, m));
+  cv::Mat grey_image(480, 640, CV_8UC1, cv::Scalar(0));
+  EXPECT_FALSE(detector.drawDebug(grey_image, m));
+}
+
+}  // namespace
+}  // namespace follow_bot
