@@ -5,8 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from harness.geometry import polyline_length
 from harness.scenario import Criterion, ScenarioError, check, metrics, parse_scenario
-from harness.simulation import Perturbations, Simulation
+from harness.simulation import Perturbations, Simulation, with_line_gaps
 from harness.world import load_world, resolve_world_path
 
 MINIMAL = {"world": "course", "driver": {"constant": [0.2, 0.0]}, "duration": 2.0}
@@ -110,3 +111,13 @@ def test_metrics_report_dropout_stop_delay_and_reply_counts():
     assert check(scenario, values) == [
         {"metric": "replies.extra", "value": 0, "rule": "== 0", "passed": True}
     ]
+
+
+def test_line_gaps_leave_the_scored_centreline_whole():
+    world = load_world(resolve_world_path("course"))
+    painted = with_line_gaps(world, ((3.0, 0.3), (10.0, 0.5)))
+    lengths = sorted(polyline_length(line.points, False) for line in painted.ground.lines)
+    total = polyline_length(world.centreline(), True)
+    assert len(lengths) == 2 and not any(line.closed for line in painted.ground.lines)
+    assert sum(lengths) == pytest.approx(total - 0.8, abs=0.03)
+    assert world.ground.lines[0].closed  # the original, used for scoring, is untouched

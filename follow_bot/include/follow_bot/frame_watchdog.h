@@ -31,6 +31,8 @@ class FrameWatchdog {
   void reset();
 
   double timeout() const { return timeout_s_; }
+  // Arrival time of the last frame (meaningless before the first).
+  double lastFrame() const { return last_frame_; }
 
  private:
   double timeout_s_;

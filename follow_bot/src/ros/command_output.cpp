@@ -55,8 +55,10 @@ void CommandOutput::publish(const Twist2D& command) {
 }
 
 void CommandOutput::checkWatchdog(const ros::TimerEvent&) {
-  if (watchdog_.shouldSendStop(ros::Time::now().toSec())) {
-    ROS_WARN("no camera frame for %.2f s: stopping the robot", watchdog_.timeout());
+  const double now = ros::Time::now().toSec();
+  if (watchdog_.shouldSendStop(now)) {
+    ROS_WARN("no camera frame since t=%.3f s (now %.3f s, timeout %.2f s): stopping the robot",
+             watchdog_.lastFrame(), now, watchdog_.timeout());
     stop();
   }
 }

@@ -17,7 +17,16 @@ import yaml
 
 from harness import scoring
 from harness.simulation import Perturbations
-from harness.validation import Fields, ValidationError, boolean, mapping, number, string, vector
+from harness.validation import (
+    Fields,
+    ValidationError,
+    boolean,
+    mapping,
+    number,
+    sequence,
+    string,
+    vector,
+)
 from harness.world import World, WorldError, resolve_world_path
 
 STOP_CONDITIONS = ("duration", "lap_complete")
@@ -36,7 +45,7 @@ class Behaviour:
 
 @dataclass(frozen=True)
 class Criterion:
-    metric: str  # dotted path into the metrics dict, e.g. "cross_track.rms"
+    metric: str  # dotted path into the metrics, e.g. "cross_track.rms" or "dropouts.0.stop_delay"
     minimum: float | None = None
     maximum: float | None = None
     equals: Any = None
@@ -44,7 +53,12 @@ class Criterion:
     def check(self, metrics: dict) -> tuple[Any, bool]:
         value: Any = metrics
         for key in self.metric.split("."):
-            value = value.get(key) if isinstance(value, dict) else None
+            if isinstance(value, dict):
+                value = value.get(key)
+            elif isinstance(value, list) and key.isdigit() and int(key) < len(value):
+                value = value[int(key)]
+            else:
+                value = None
         if self.equals is not None:
             return value, value == self.equals
         if not isinstance(value, int | float) or isinstance(value, bool):
@@ -113,8 +127,13 @@ def _parse_dropouts(value: Any, where: str) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
+def _parse_gaps(value: Any, where: str) -> tuple[tuple[float, float], ...]:
+    items = sequence(value, where)
+    return tuple(vector(2, number(ge=0.0))(item, f"{where}[{i}]") for i, item in enumerate(items))
+
+
 def _parse_perturbations(value: Any, where: str) -> Perturbations:
-    f = Fields(value, where, {"gain", "noise_sigma", "delay_steps", "dropout"})
+    f = Fields(value, where, {"gain", "noise_sigma", "delay_steps", "dropout", "line_gap"})
     delay = f.get("delay_steps", number(ge=0.0), None)
     if delay is not None and delay != int(delay):
         raise ScenarioError(f"{f.where('delay_steps')}: must be a whole number, got {delay!r}")
@@ -123,6 +142,7 @@ def _parse_perturbations(value: Any, where: str) -> Perturbations:
         noise_sigma=f.get("noise_sigma", number(ge=0.0), None),
         delay_steps=None if delay is None else int(delay),
         dropouts=f.get("dropout", _parse_dropouts, ()),
+        line_gaps=f.get("line_gap", _parse_gaps, ()),
     )
 
 
@@ -239,6 +259,8 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         during = (t >= (stop["t_stop"] if stop["t_stop"] is not None else end)) & (t < end)
         moving = (np.abs(run["v"]) > 0) | (np.abs(run["w"]) > 0)
         stop["moving_after_stop"] = int(np.count_nonzero(during & moving))
+        after_stop_step = during & (t > stop["t_stop"]) if stop["t_stop"] is not None else during
+        stop["commands_after_stop"] = int(run["replies"][after_stop_step].sum())
         dropouts.append(stop)
     if dropouts:
         out["dropouts"] = dropouts

@@ -7,7 +7,7 @@ the same stepping is unit-tested without a roscore.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -26,6 +26,31 @@ class Perturbations:
     noise_sigma: float | None = None  # grey levels; None keeps the world's
     delay_steps: int | None = None  # actuation delay in steps; None keeps the world's
     dropouts: tuple[tuple[float, float], ...] = ()  # [start, end) sim times without frames
+    # Unpainted stretches of floor line 0: (arc length from its first point, length), metres.
+    line_gaps: tuple[tuple[float, float], ...] = ()
+
+
+def with_line_gaps(world: World, gaps: tuple[tuple[float, float], ...]) -> World:
+    """The world with stretches of line 0 left unpainted. Scoring keeps the original world:
+    the robot is still judged against the whole centreline."""
+    if not gaps:
+        return world
+    line = world.ground.lines[0]
+    points = line.points
+    closed_points = np.vstack([points, points[:1]]) if line.closed else points
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(closed_points, axis=0).T))])
+    arc = arc[: len(points)]
+    keep = np.ones(len(points), dtype=bool)
+    for start, length in gaps:
+        keep &= ~((arc >= start) & (arc <= start + length))
+    # Open the loop just after a gap so every kept run is one contiguous polyline piece.
+    first_kept_after_gap = int(np.argmax(~keep[:-1] & keep[1:])) + 1 if not keep.all() else 0
+    order = np.roll(np.arange(len(points)), -first_kept_after_gap)
+    runs = np.split(order, np.nonzero(~keep[order])[0])
+    pieces = [run[keep[run]] for run in runs if keep[run].sum() >= 2]
+    lines = tuple(replace(line, points=points[piece], closed=False) for piece in pieces)
+    ground = replace(world.ground, lines=lines + world.ground.lines[1:])
+    return replace(world, ground=ground)
 
 
 @dataclass
@@ -94,7 +119,8 @@ class Simulation:
         self.dt = 1.0 / rate_hz
         self.perturbations = perturbations or Perturbations()
         p = self.perturbations
-        self.renderer = Renderer(world, gain=p.gain, noise_sigma=p.noise_sigma)
+        painted = with_line_gaps(world, p.line_gaps)
+        self.renderer = Renderer(painted, gain=p.gain, noise_sigma=p.noise_sigma)
         delay = world.robot.delay_steps if p.delay_steps is None else p.delay_steps
         self.robot = Robot(
             start or world.robot.start,
