@@ -229,6 +229,7 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         "steps": int(len(t)),
         "sim_time": float(t[-1] + 1.0 / scenario.rate_hz) if len(t) else 0.0,
         "final_pose": [float(v) for v in path[-1]] if len(t) else None,
+        "loop_wall_time": float(run["loop_wall"]) if "loop_wall" in run else None,
         "commands": scoring.command_stats(t, run["v"], run["w"], int(run["missed"].sum())),
         "replies": {
             "frames": int(frame_steps.sum()),

@@ -177,7 +177,7 @@ class SimNode:
             self._wait_for_behaviour()
         self.inbox.take()  # forget anything sent before the run started
         period = 1.0 / self.rate_hz
-        next_wall = time.monotonic()
+        next_wall = loop_start = time.monotonic()
         try:
             while not rospy.is_shutdown() and not self._finished():
                 self._publish_clock()
@@ -199,13 +199,13 @@ class SimNode:
         finally:
             if video is not None:
                 video.release()
-            self._write_record()
+            self._write_record(time.monotonic() - loop_start)
 
-    def _write_record(self) -> None:
+    def _write_record(self, loop_wall: float) -> None:
         if not self.record_path:
             return
         Path(self.record_path).parent.mkdir(parents=True, exist_ok=True)
-        np.savez(self.record_path, **self.sim.record.arrays())
+        np.savez(self.record_path, loop_wall=loop_wall, **self.sim.record.arrays())
         arrays = self.sim.record.arrays()
         rospy.loginfo(
             "sim: %d steps, %.2f s sim time, %d missed replies, record %s",

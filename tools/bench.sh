@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# make bench: every benchmark, each reporting against a baseline measured in the same run.
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/.." && pwd)
+echo "== follower line detector vs the lecture's algorithm (same frames, one thread)"
+"$repo/build/devel/lib/follow_bot/line_detector_bench"
+echo "== harness"
+"$repo/harness/scripts/run_python" harness.bench
