@@ -106,7 +106,6 @@ class FollowerNodelet : public nodelet::Nodelet {
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    output_->frameArrived();
     const image_converter::FrameCheck check =
         image_converter::checkFrame(image_converter::rawFrameOf(*msg));
     if (!check.ok()) {
@@ -120,6 +119,8 @@ class FollowerNodelet : public nodelet::Nodelet {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.what());
       return;
     }
+    // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
+    output_->frameArrived();
     const LineStatus status = follow(*frame, *msg);
     if (status_pub_.getNumSubscribers() > 0) status_pub_.publish(status);
   }

@@ -1,0 +1,44 @@
+"""Absurd ~params are a clear start-up error (exit 1, the parameter named), never a crash."""
+
+import os
+import subprocess
+
+import pytest
+
+from harness.run_scenario import free_port, stop, wait_for_port
+
+
+@pytest.fixture(scope="module")
+def master_env():
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
+    roscore = subprocess.Popen(
+        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
+    )
+    assert wait_for_port(port, 20.0)
+    yield env
+    stop(roscore)
+
+
+@pytest.mark.parametrize(
+    ("node", "param", "words"),
+    [
+        ("follow_bot follower", "_kp:=-1", "kp"),
+        ("follow_bot follower", "_h_min:=200", "~h_min is outside its range"),
+        ("follow_bot follower", "_mode:=fast", "~mode"),
+        ("follow_bot follower", "_limit_linear:=0", "~limit_linear must be > 0"),
+        ("follow_bot follower", "_watchdog_timeout:=-1", "~watchdog_timeout must be > 0"),
+        ("follow_bot follower", "_band_top_fraction:=1.5", "~band_top_fraction"),
+        ("image_converter image_converter", "_circle_radius:=0", "~circle_radius"),
+        ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
+    ],
+)
+def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, request):
+    # A node name of its own: private params set by `_x:=` stay on the master after a run.
+    name = f"__name:=case{abs(hash(request.node.name))}"
+    result = subprocess.run(
+        ["rosrun", *node.split(), param, name], env=master_env, capture_output=True, text=True,
+        timeout=60,
+    )  # fmt: skip
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert words in result.stdout + result.stderr
