@@ -3,6 +3,7 @@
 // Thin wiring around LineDetector (band-only HSV threshold + moments) and LineController
 // (lecture law or PD with line search); CommandOutput adds limits, the frame watchdog and the
 // final stop. Thresholds and gains are ~params, also live through dynamic_reconfigure.
+#include <cmath>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -12,23 +13,33 @@
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/FollowerConfig.h"
 #include "follow_bot/LineStatus.h"
 #include "follow_bot/line_controller.h"
 #include "follow_bot/line_detector.h"
+#include "follow_bot/line_path.h"
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
+#include "follow_bot/ros/params.h"
 #include "image_converter/ros/frame_msg.h"
 
 namespace follow_bot {
 
 namespace {
 
-// Everything dynamic_reconfigure can change, as core configurations. Throws
-// std::invalid_argument naming the first bad value.
-std::pair<LineDetectorConfig, LineControllerConfig> coreConfigs(const FollowerConfig& cfg) {
+// Everything dynamic_reconfigure can change, as core configurations.
+struct Settings {
+  LineDetectorConfig detector;
+  LineControllerConfig controller;  // the lecture or pd law, and path mode's fallback
+  LinePathConfig path;
+  bool path_mode = false;
+};
+
+// Throws std::invalid_argument naming the first bad value.
+Settings coreSettings(const FollowerConfig& cfg) {
   // dynamic_reconfigure clamps live updates, but ~params read at start-up are not clamped.
   FollowerConfig clamped = cfg;
   clamped.__clamp__();
@@ -40,7 +51,8 @@ std::pair<LineDetectorConfig, LineControllerConfig> coreConfigs(const FollowerCo
                                   param->description + "; ranges in README.md)");
     }
   }
-  LineDetectorConfig detector;
+  Settings settings;
+  LineDetectorConfig& detector = settings.detector;
   detector.lower = {cfg.h_min, cfg.s_min, cfg.v_min};
   detector.upper = {cfg.h_max, cfg.s_max, cfg.v_max};
   detector.band = {cfg.band_top_fraction, cfg.band_rows};
@@ -48,9 +60,13 @@ std::pair<LineDetectorConfig, LineControllerConfig> coreConfigs(const FollowerCo
   detector.look_ahead = {cfg.look_ahead_top_fraction, cfg.band_rows};
   detector.min_pixels = cfg.min_pixels;
 
-  LineControllerConfig controller;
-  const std::optional<ControlMode> mode = parseControlMode(cfg.mode);
-  if (!mode) throw std::invalid_argument("~mode must be 'lecture' or 'pd', got '" + cfg.mode + "'");
+  LineControllerConfig& controller = settings.controller;
+  settings.path_mode = cfg.mode == "path";
+  const std::optional<ControlMode> mode =
+      settings.path_mode ? ControlMode::kPD : parseControlMode(cfg.mode);
+  if (!mode) {
+    throw std::invalid_argument("~mode must be 'lecture', 'pd' or 'path', got '" + cfg.mode + "'");
+  }
   controller.mode = *mode;
   controller.kp = cfg.kp;
   controller.kd = cfg.kd;
@@ -61,10 +77,33 @@ std::pair<LineDetectorConfig, LineControllerConfig> coreConfigs(const FollowerCo
   controller.look_ahead_weight = cfg.look_ahead_weight;
   controller.search_rate = cfg.search_rate;
 
-  for (const std::string& error : {validate(detector), validate(controller)}) {
+  LinePathConfig& path = settings.path;
+  path.speed = cfg.max_linear;
+  path.min_speed = cfg.min_linear;
+  path.max_angular = cfg.max_angular;
+  path.heading_gain = cfg.heading_gain;
+  path.lateral_gain = cfg.lateral_gain;
+
+  for (const std::string& error : {validate(detector), validate(controller), validate(path)}) {
     if (!error.empty()) throw std::invalid_argument(error);
   }
-  return {detector, controller};
+  return settings;
+}
+
+// Mounting from ~camera_height (m), ~camera_pitch_deg (deg, down positive), ~camera_x_offset (m);
+// intrinsics arrive later with camera_info.
+CameraGeometry readMounting(const ros::NodeHandle& pnh) {
+  CameraGeometry camera;
+  camera.height_m = positiveParam(pnh, "camera_height", camera.height_m);
+  double pitch_deg = camera.pitch_rad * 180.0 / M_PI;
+  pitch_deg = checkedParam(
+      pnh, "camera_pitch_deg", pitch_deg,
+      [](double v) { return std::isfinite(v) && std::abs(v) < 89.0; }, "within (-89, 89)");
+  camera.pitch_rad = pitch_deg * M_PI / 180.0;
+  camera.x_offset_m = checkedParam(
+      pnh, "camera_x_offset", camera.x_offset_m, [](double v) { return std::isfinite(v); },
+      "finite");
+  return camera;
 }
 
 }  // namespace
@@ -77,10 +116,10 @@ class FollowerNodelet : public nodelet::Nodelet {
 
     FollowerConfig cfg = FollowerConfig::__getDefault__();
     cfg.__fromServer__(pnh);
-    const auto [detector, controller] = coreConfigs(cfg);  // throws on bad ~params
-    detector_ = std::make_unique<LineDetector>(detector);
-    controller_ = std::make_unique<LineController>(controller);
+    apply(coreSettings(cfg));  // throws on bad ~params
+    camera_ = readMounting(pnh);
     output_ = std::make_unique<CommandOutput>(nh, pnh);
+    camera_info_sub_ = nh.subscribe("camera_info", 1, &FollowerNodelet::onCameraInfo, this);
 
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<FollowerConfig>>(mutex_, pnh);
     reconfigure_->setCallback([this](FollowerConfig& config, uint32_t) { reconfigure(config); });
@@ -95,13 +134,55 @@ class FollowerNodelet : public nodelet::Nodelet {
   // Called with mutex_ held by the dynamic_reconfigure server.
   void reconfigure(const FollowerConfig& config) {
     try {
-      const auto [detector, controller] = coreConfigs(config);
-      detector_ = std::make_unique<LineDetector>(detector);
-      if (controller.mode != controller_->config().mode) controller_->reset();
-      controller_ = std::make_unique<LineController>(controller);
+      apply(coreSettings(config));
     } catch (const std::invalid_argument& error) {
       NODELET_ERROR("rejected reconfiguration, keeping the previous settings: %s", error.what());
     }
+  }
+
+  // New settings start with fresh controller state (a new law must not inherit the old one's).
+  void apply(const Settings& settings) {
+    settings_ = settings;
+    detector_ = std::make_unique<LineDetector>(settings.detector);
+    controller_ = std::make_unique<LineController>(settings.controller);
+    path_follower_.reset();
+    if (settings.path_mode && has_intrinsics_) {
+      path_follower_ =
+          std::make_unique<LinePathFollower>(settings.path, camera_, settings.controller);
+    }
+  }
+
+  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+    std::lock_guard<boost::recursive_mutex> lock(mutex_);
+    CameraGeometry camera = camera_;
+    camera.fx = info->K[0];
+    camera.fy = info->K[4];
+    camera.cx = info->K[2];
+    camera.cy = info->K[5];
+    const std::string error = validate(camera);
+    if (!error.empty()) {
+      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
+      return;
+    }
+    const bool changed = !has_intrinsics_ || camera.fx != camera_.fx || camera.fy != camera_.fy ||
+                         camera.cx != camera_.cx || camera.cy != camera_.cy;
+    camera_ = camera;
+    has_intrinsics_ = true;
+    if (changed) apply(settings_);
+  }
+
+  // The law for this frame: path mode needs intrinsics; until they arrive it steers with pd.
+  Twist2D steer(const LineMeasurement& seen, double stamp) {
+    if (path_follower_) return path_follower_->update(seen, stamp, last_command_);
+    if (settings_.path_mode) {
+      NODELET_WARN_THROTTLE(5.0, "path mode: no valid camera_info on %s yet, steering with pd",
+                            camera_info_sub_.getTopic().c_str());
+    }
+    return controller_->update(seen, stamp);
+  }
+
+  LineState state() const {
+    return path_follower_ ? path_follower_->state() : controller_->state();
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
@@ -128,10 +209,9 @@ class FollowerNodelet : public nodelet::Nodelet {
   LineStatus follow(const cv_bridge::CvImage& frame, const sensor_msgs::Image& msg) {
     const LineMeasurement seen = detector_->detect(frame.image);
     const ros::Time stamp = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
-    const Twist2D command = output_->send(controller_->update(seen, stamp.toSec()), stamp);
-    if (!seen.band.found) {
-      NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(controller_->state()));
-    }
+    const Twist2D command = output_->send(steer(seen, stamp.toSec()), stamp);
+    last_command_ = command;
+    if (!seen.band.found) NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(state()));
     if (debug_pub_.getNumSubscribers() > 0) {
       cv_bridge::CvImage debug(msg.header, "bgr8", frame.image.clone());
       detector_->drawDebug(debug.image, seen);
@@ -145,7 +225,7 @@ class FollowerNodelet : public nodelet::Nodelet {
     out.error = seen.band.error_normalised;
     out.confidence = seen.band.confidence;
     out.pixel_count = seen.band.pixel_count;
-    out.state = toString(controller_->state());
+    out.state = toString(state());
     out.linear = command.linear;
     out.angular = command.angular;
     return out;
@@ -154,6 +234,12 @@ class FollowerNodelet : public nodelet::Nodelet {
   boost::recursive_mutex mutex_;  // the type dynamic_reconfigure::Server shares
   std::unique_ptr<LineDetector> detector_;
   std::unique_ptr<LineController> controller_;
+  std::unique_ptr<LinePathFollower> path_follower_;
+  Settings settings_;
+  CameraGeometry camera_;
+  bool has_intrinsics_ = false;
+  Twist2D last_command_;  // what the robot was told to do since the previous frame
+  ros::Subscriber camera_info_sub_;
   std::unique_ptr<CommandOutput> output_;
   std::unique_ptr<dynamic_reconfigure::Server<FollowerConfig>> reconfigure_;
   ros::Publisher status_pub_;

@@ -103,9 +103,12 @@ class SimNode:
 
         self.camera_info = camera_info_msg(self.sim.renderer.camera.camera_info_dict())
         self.inbox = CommandInbox()
-        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=1)
-        self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1)
-        self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1)
+        # Synchronous publishing (queue_size=None): each message is on the wire before the next
+        # is made, so a behaviour never sees frame k while its clock still says k - n. With a
+        # queue, a busy sim starved rospy's sender thread and the behaviour's clock lagged frames.
+        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
+        self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=None)
+        self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=None)
         self.pose_pub = rospy.Publisher("/sim/pose", Odometry, queue_size=1)
         self.tf = tf2_ros.TransformBroadcaster()
         self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self.inbox.put, queue_size=10)

@@ -1,0 +1,36 @@
+// Maps image pixels to points on a flat floor, for a camera fixed on the robot base.
+//
+// Frames (REP-103): base_link has x forward, y left, z up, with the floor at z = 0. The camera's
+// optical centre sits at (x_offset_m, 0, height_m); its optical axis is (cos p, 0, -sin p) for a
+// pitch p (positive looks down), image right is the robot's right (0, -1, 0) and image down is
+// their cross product. These match the harness simulator's camera.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+namespace follow_bot {
+
+// Defaults are the harness camera: 640x480, 60 deg horizontal field of view, 0.3 m up, 20 deg down.
+struct CameraGeometry {
+  // Intrinsics in pixels, from CameraInfo K = [fx 0 cx; 0 fy cy; 0 0 1]; no distortion.
+  double fx = 554.256;
+  double fy = 554.256;
+  double cx = 320.0;
+  double cy = 240.0;
+  double height_m = 0.30;                                    // optical centre above the floor
+  double pitch_rad = 20.0 * 3.14159265358979323846 / 180.0;  // positive tilts the axis down
+  double x_offset_m = 0.0;                                   // optical centre forward of base_link
+};
+
+// Empty when the geometry is usable, otherwise a message naming the first bad field.
+std::string validate(const CameraGeometry& camera);
+
+// The floor point (x forward, y left, metres in base_link) seen at pixel (u, v) = (column, row),
+// pixel centres at integer coordinates as in cv::moments. Empty for pixels at or above the
+// horizon (their ray never meets the floor) and for non-finite input.
+std::optional<cv::Point2d> pixelToGround(const CameraGeometry& camera, double u, double v);
+
+}  // namespace follow_bot

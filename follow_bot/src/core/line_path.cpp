@@ -1,0 +1,371 @@
+#include "follow_bot/line_path.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+namespace follow_bot {
+namespace {
+
+// Below this turn per frame the exact arc loses precision to cancellation; its series is exact
+// to double precision there.
+constexpr double kSmallTurnRad = 1e-6;
+
+std::string requirePositive(const char* name, double value) {
+  if (std::isfinite(value) && value > 0.0) return "";
+  std::ostringstream message;
+  message << name << " must be finite and > 0, got " << value;
+  return message.str();
+}
+
+std::string requireAtLeast(const char* name, double value, double min) {
+  if (std::isfinite(value) && value >= min) return "";
+  std::ostringstream message;
+  message << name << " must be >= " << min << ", got " << value;
+  return message.str();
+}
+
+std::string requireInRange(const char* name, double value, double min, double max) {
+  if (std::isfinite(value) && value >= min && value <= max) return "";
+  std::ostringstream message;
+  message << name << " must be in [" << min << ", " << max << "], got " << value;
+  return message.str();
+}
+
+bool isFinite(const cv::Point2d& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
+
+// The path near the base, in base_link.
+struct PathAtBase {
+  double lateral = 0.0;
+  double heading = 0.0;
+  double curvature = 0.0;
+  double before_start = 0.0;  // m the base's foot lies before the first fitted point, if any
+};
+
+// Fits the remembered points around the one nearest the base with n = a + b s + c s^2 in a
+// frame (s along the path, n to its left) and evaluates it at the foot of the base. Only the
+// path's direction uses the points' order (their stamps); duplicates, the look-ahead band's
+// points and noise just weigh in the least squares. Empty when the points are too few or too
+// short, or the base lies beyond either end of them by more than max_extrapolation.
+std::optional<PathAtBase> fitPathAtBase(const std::vector<cv::Point2d>& positions,
+                                        const std::vector<double>& stamps, double fit_length,
+                                        double max_extrapolation) {
+  if (positions.empty()) return std::nullopt;
+  const cv::Point2d anchor = *std::min_element(
+      positions.begin(), positions.end(),
+      [](const cv::Point2d& a, const cv::Point2d& b) { return a.dot(a) < b.dot(b); });
+
+  // Candidates: points within fit_length of the anchor. Their principal axis is the path's
+  // direction, oriented the way the points were seen (the robot drives forward along it).
+  std::vector<size_t> candidates;
+  cv::Point2d mean(0.0, 0.0);
+  double mean_stamp = 0.0;
+  for (size_t i = 0; i < positions.size(); ++i) {
+    const cv::Point2d offset = positions[i] - anchor;
+    if (offset.dot(offset) > fit_length * fit_length) continue;
+    candidates.push_back(i);
+    mean += positions[i];
+    mean_stamp += stamps[i];
+  }
+  constexpr size_t kMinPoints = 3;
+  if (candidates.size() < kMinPoints) return std::nullopt;
+  mean *= 1.0 / candidates.size();
+  mean_stamp /= candidates.size();
+  double sxx = 0.0, sxy = 0.0, syy = 0.0;
+  for (size_t i : candidates) {
+    const cv::Point2d d = positions[i] - mean;
+    sxx += d.x * d.x;
+    sxy += d.x * d.y;
+    syy += d.y * d.y;
+  }
+  const double axis_angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  cv::Point2d along(std::cos(axis_angle), std::sin(axis_angle));
+  double time_trend = 0.0;
+  for (size_t i : candidates)
+    time_trend += (stamps[i] - mean_stamp) * (positions[i] - mean).dot(along);
+  if (time_trend < 0.0 || (time_trend == 0.0 && along.x < 0.0)) along = -along;
+  const cv::Point2d left(-along.y, along.x);
+
+  // A window of fit_length around the anchor, slid inwards at the ends of the path so that the
+  // start of the path is fitted over as much length as the middle.
+  double s_min = 0.0, s_max = 0.0;
+  for (size_t i : candidates) {
+    const double s = (positions[i] - anchor).dot(along);
+    s_min = std::min(s_min, s);
+    s_max = std::max(s_max, s);
+  }
+  const double window_begin =
+      std::clamp(-0.5 * fit_length, s_min, std::max(s_min, s_max - fit_length));
+  std::vector<cv::Point2d> local;  // (s, n)
+  double kept_min = window_begin + fit_length, kept_max = window_begin;
+  for (size_t i : candidates) {
+    const cv::Point2d d = positions[i] - anchor;
+    const double s = d.dot(along);
+    if (s < window_begin || s > window_begin + fit_length) continue;
+    local.emplace_back(s, d.dot(left));
+    kept_min = std::min(kept_min, s);
+    kept_max = std::max(kept_max, s);
+  }
+  // Curvature needs length (its noise grows as span^-2 at a given point count), so shorter
+  // stretches fit a line.
+  const double span = kept_max - kept_min;
+  constexpr double kMinLineSpanFraction = 0.1;
+  if (local.size() < kMinPoints || span < kMinLineSpanFraction * fit_length) return std::nullopt;
+  const int terms = span >= 0.5 * fit_length ? 3 : 2;
+  cv::Mat_<double> design(static_cast<int>(local.size()), terms);
+  cv::Mat_<double> lateral(static_cast<int>(local.size()), 1);
+  for (int row = 0; row < design.rows; ++row) {
+    const double s = local[row].x;
+    design(row, 0) = 1.0;
+    design(row, 1) = s;
+    if (terms == 3) design(row, 2) = s * s;
+    lateral(row, 0) = local[row].y;
+  }
+  cv::Mat_<double> coefficients;
+  if (!cv::solve(design, lateral, coefficients, cv::DECOMP_QR)) return std::nullopt;
+  const double a = coefficients(0), b = coefficients(1), c = terms == 3 ? coefficients(2) : 0.0;
+
+  // Foot of the base on the curve: Newton on the derivative of the squared distance, from the
+  // base's own along-path coordinate (the curve is nearly straight over the window).
+  const double base_s = -anchor.dot(along);
+  const double base_n = -anchor.dot(left);
+  double s = base_s;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    const double n = a + s * (b + s * c);
+    const double slope = b + 2.0 * c * s;
+    const double gradient = (s - base_s) + (n - base_n) * slope;
+    const double hessian = 1.0 + slope * slope + (n - base_n) * 2.0 * c;
+    if (!(hessian > 0.0)) break;
+    s -= gradient / hessian;
+  }
+  if (!(s >= kept_min - max_extrapolation && s <= kept_max + max_extrapolation)) {
+    return std::nullopt;
+  }
+  const double slope = b + 2.0 * c * s;
+  const cv::Point2d foot = anchor + s * along + (a + s * (b + s * c)) * left;
+  cv::Point2d tangent = along + slope * left;
+  tangent *= 1.0 / std::sqrt(tangent.dot(tangent));
+  PathAtBase path;
+  path.before_start = std::max(0.0, kept_min - s);
+  path.lateral = foot.dot(cv::Point2d(-tangent.y, tangent.x));
+  path.heading = std::atan2(tangent.y, tangent.x);
+  path.curvature = 2.0 * c / std::pow(1.0 + slope * slope, 1.5);
+  if (!std::isfinite(path.lateral) || !std::isfinite(path.heading) ||
+      !std::isfinite(path.curvature)) {
+    return std::nullopt;
+  }
+  return path;
+}
+
+// Pure pursuit: the curvature of the arc tangent to the robot's heading through the point
+// ahead whose distance is the first at or beyond `lookahead` (else the furthest). Empty when
+// no point lies ahead.
+std::optional<double> pursuitCurvature(const std::vector<cv::Point2d>& positions,
+                                       double lookahead) {
+  std::optional<cv::Point2d> target;
+  double target_distance = 0.0;
+  for (const cv::Point2d& p : positions) {
+    if (!(p.x > 0.0)) continue;
+    const double distance = std::sqrt(p.dot(p));
+    const bool beyond = distance >= lookahead;
+    const bool target_beyond = target && target_distance >= lookahead;
+    const bool better = !target || (beyond && (!target_beyond || distance < target_distance)) ||
+                        (!beyond && !target_beyond && distance > target_distance);
+    if (better) {
+      target = p;
+      target_distance = distance;
+    }
+  }
+  if (!target) return std::nullopt;
+  const double curvature = 2.0 * target->y / (target_distance * target_distance);
+  if (!std::isfinite(curvature)) return std::nullopt;
+  return curvature;
+}
+
+LineControllerConfig inPdMode(LineControllerConfig config) {
+  config.mode = ControlMode::kPD;
+  return config;
+}
+
+const LinePathConfig& validated(const LinePathConfig& config, const CameraGeometry& camera) {
+  std::string error = validate(config);
+  if (error.empty()) error = validate(camera);
+  if (!error.empty()) throw std::invalid_argument("LinePathFollower: " + error);
+  return config;
+}
+
+}  // namespace
+
+std::string validate(const LinePathConfig& c) {
+  for (const std::string& error : {
+           requirePositive("speed", c.speed),
+           requireInRange("min_speed", c.min_speed, 0.0, c.speed),
+           requirePositive("max_angular", c.max_angular),
+           requireAtLeast("heading_gain", c.heading_gain, 0.0),
+           requireAtLeast("lateral_gain", c.lateral_gain, 0.0),
+           requireInRange("min_confidence", c.min_confidence, 0.0, 1.0),
+           requirePositive("fit_length", c.fit_length),
+           requireAtLeast("max_extrapolation", c.max_extrapolation, 0.0),
+           requirePositive("start_lookahead", c.start_lookahead),
+           requireAtLeast("keep_behind", c.keep_behind, 0.0),
+           requirePositive("max_point_age", c.max_point_age),
+           requireAtLeast("max_points", c.max_points, 3),
+           requireAtLeast("min_point_spacing", c.min_point_spacing, 0.0),
+           requirePositive("max_frame_gap", c.max_frame_gap),
+       }) {
+    if (!error.empty()) return error;
+  }
+  return "";
+}
+
+LinePathFollower::LinePathFollower(const LinePathConfig& config, const CameraGeometry& camera,
+                                   const LineControllerConfig& fallback)
+    : config_(validated(config, camera)), camera_(camera), fallback_(inPdMode(fallback)) {}
+
+void LinePathFollower::reset() {
+  fallback_.reset();
+  points_.clear();
+  path_state_ = PathState();
+  following_ = false;
+  has_stamp_ = false;
+  last_sighting_ = LineMeasurement();
+}
+
+LineState LinePathFollower::state() const {
+  return following_ ? LineState::kFollowing : fallback_.state();
+}
+
+std::vector<cv::Point2d> LinePathFollower::pathPoints() const {
+  std::vector<cv::Point2d> positions;
+  positions.reserve(points_.size());
+  for (const PathPoint& point : points_) positions.push_back(point.position);
+  return positions;
+}
+
+Twist2D LinePathFollower::update(const LineMeasurement& measurement, double stamp,
+                                 const Twist2D& applied_since_last_frame) {
+  if (!std::isfinite(stamp)) return Twist2D();
+  if (has_stamp_ && stamp < last_stamp_) reset();
+  const double dt = has_stamp_ ? stamp - last_stamp_ : 0.0;
+  has_stamp_ = true;
+  last_stamp_ = stamp;
+
+  moveMemory(applied_since_last_frame, dt);
+  forgetStalePoints(stamp);
+  remember(measurement, stamp);
+
+  std::vector<cv::Point2d> positions;
+  std::vector<double> stamps;
+  for (const PathPoint& point : points_) {
+    positions.push_back(point.position);
+    stamps.push_back(point.stamp);
+  }
+  path_state_ = PathState();
+  const std::optional<double> pursuit = pursuitCurvature(positions, config_.start_lookahead);
+  std::optional<double> curvature = pursuit;
+  if (const std::optional<PathAtBase> path =
+          fitPathAtBase(positions, stamps, config_.fit_length, config_.max_extrapolation)) {
+    path_state_.valid = true;
+    path_state_.lateral = path->lateral;
+    path_state_.heading = path->heading;
+    path_state_.curvature = path->curvature;
+    curvature = path->curvature + config_.heading_gain * std::sin(path->heading) +
+                config_.lateral_gain * path->lateral;
+    // Extended backwards past the points the fit is a guess (a quadratic fitted across the
+    // start of a curve tilts its extension), so pure pursuit hands over to it gradually as the
+    // path reaches the base. before_start > 0 implies max_extrapolation > 0.
+    if (pursuit && path->before_start > 0.0) {
+      const double pursuit_weight = path->before_start / config_.max_extrapolation;
+      curvature = (1.0 - pursuit_weight) * *curvature + pursuit_weight * *pursuit;
+    }
+  }
+
+  following_ = curvature.has_value();
+  if (!following_) {
+    // Nothing left ahead: the fallback's lost-line search takes over, and whatever is seen
+    // next starts a fresh path.
+    points_.clear();
+    path_state_.points = 0;
+    return fallback_.update(measurement, stamp);
+  }
+  path_state_.points = static_cast<int>(points_.size());
+  // Keeps the fallback's clock and last side in step, so it starts from the end of the path.
+  fallback_.update(last_sighting_, stamp);
+  return drive(*curvature);
+}
+
+void LinePathFollower::moveMemory(const Twist2D& applied, double dt) {
+  if (points_.empty() || dt <= 0.0) return;
+  const double distance = applied.linear * dt;
+  const double turn = applied.angular * dt;
+  if (dt > config_.max_frame_gap || !std::isfinite(distance) || !std::isfinite(turn)) {
+    points_.clear();
+    return;
+  }
+  // The robot's displacement over the exact arc, in the previous base frame.
+  cv::Point2d displacement;
+  if (std::abs(turn) < kSmallTurnRad) {
+    displacement = cv::Point2d(distance * (1.0 - turn * turn / 6.0), distance * turn / 2.0);
+  } else {
+    displacement =
+        cv::Point2d(distance * std::sin(turn) / turn, distance * (1.0 - std::cos(turn)) / turn);
+  }
+  // Points stay put in the world, so in the new frame they move by the inverse motion.
+  const double cos_turn = std::cos(turn);
+  const double sin_turn = std::sin(turn);
+  for (PathPoint& point : points_) {
+    const cv::Point2d d = point.position - displacement;
+    point.position = cv::Point2d(cos_turn * d.x + sin_turn * d.y, -sin_turn * d.x + cos_turn * d.y);
+  }
+}
+
+void LinePathFollower::forgetStalePoints(double stamp) {
+  const auto stale = [&](const PathPoint& point) {
+    return !isFinite(point.position) || point.position.x < -config_.keep_behind ||
+           stamp - point.stamp > config_.max_point_age;
+  };
+  points_.erase(std::remove_if(points_.begin(), points_.end(), stale), points_.end());
+}
+
+void LinePathFollower::remember(const LineMeasurement& measurement, double stamp) {
+  if (!measurement.ok()) return;
+  const auto seen = [&](const BandMeasurement& band) {
+    return band.found && band.confidence >= config_.min_confidence;
+  };
+  const bool near = seen(measurement.band) && rememberBand(measurement.band, false, stamp);
+  const bool ahead =
+      seen(measurement.look_ahead) && rememberBand(measurement.look_ahead, true, stamp);
+  while (points_.size() > static_cast<size_t>(config_.max_points)) points_.pop_front();
+  if (!near && !ahead) return;
+  last_sighting_ = measurement;
+  // The fallback steers on the near band only; a look-ahead sighting alone stands in for it so
+  // the fallback still learns which side the line was on.
+  if (!near) last_sighting_.band = measurement.look_ahead;
+}
+
+bool LinePathFollower::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {
+  const std::optional<cv::Point2d> ground =
+      pixelToGround(camera_, band.centroid_x, band.centroid_y);
+  if (!ground) return false;
+  const auto latest_of_band =
+      std::find_if(points_.rbegin(), points_.rend(),
+                   [&](const PathPoint& point) { return point.look_ahead == look_ahead; });
+  if (latest_of_band != points_.rend()) {
+    const cv::Point2d step = *ground - latest_of_band->position;
+    if (step.dot(step) < config_.min_point_spacing * config_.min_point_spacing) return true;
+  }
+  points_.push_back(PathPoint{*ground, stamp, look_ahead});
+  return true;
+}
+
+Twist2D LinePathFollower::drive(double curvature) const {
+  double linear = config_.speed;
+  if (std::abs(curvature) * linear > config_.max_angular) {
+    linear = std::max(config_.min_speed, config_.max_angular / std::abs(curvature));
+  }
+  return Twist2D{linear, std::clamp(linear * curvature, -config_.max_angular, config_.max_angular)};
+}
+
+}  // namespace follow_bot

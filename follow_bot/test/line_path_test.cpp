@@ -1,0 +1,605 @@
+#include "follow_bot/line_path.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace follow_bot {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kFrameDt = 1.0 / 30.0;
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+constexpr double kBandRow = 369.5;       // centroid row of the lecture band, rows 360..379
+constexpr double kLookAheadRow = 273.5;  // the default look-ahead band, rows 264..283
+
+double degrees(double deg) { return deg * kPi / 180.0; }
+
+CameraGeometry harnessCamera() {
+  CameraGeometry camera;
+  camera.fx = camera.fy = 554.256;
+  camera.cx = 320.0;
+  camera.cy = 240.0;
+  camera.height_m = 0.3;
+  camera.pitch_rad = degrees(20.0);
+  camera.x_offset_m = 0.0;
+  return camera;
+}
+
+// The forward camera model, written independently of pixelToGround: a floor point in
+// base_link to (u, v); empty behind the camera.
+std::optional<cv::Point2d> projectToPixel(const CameraGeometry& camera, const cv::Point2d& p) {
+  const double pitch = camera.pitch_rad;
+  const cv::Vec3d z_axis(std::cos(pitch), 0.0, -std::sin(pitch));
+  const cv::Vec3d x_axis(0.0, -1.0, 0.0);
+  const cv::Vec3d y_axis = z_axis.cross(x_axis);
+  const cv::Vec3d from_camera(p.x - camera.x_offset_m, p.y, -camera.height_m);
+  const double depth = from_camera.dot(z_axis);
+  if (depth <= 1e-6) return std::nullopt;
+  return cv::Point2d(camera.cx + camera.fx * from_camera.dot(x_axis) / depth,
+                     camera.cy + camera.fy * from_camera.dot(y_axis) / depth);
+}
+
+struct Pose {
+  double x = 0.0;
+  double y = 0.0;
+  double yaw = 0.0;
+};
+
+// The simulator's unicycle: (v, w) held for dt, integrated exactly.
+Pose drive(const Pose& pose, const Twist2D& command, double dt) {
+  const double v = command.linear, w = command.angular;
+  if (std::abs(w) < 1e-9) {
+    return {pose.x + v * dt * std::cos(pose.yaw), pose.y + v * dt * std::sin(pose.yaw), pose.yaw};
+  }
+  const double yaw = pose.yaw + w * dt;
+  return {pose.x + v / w * (std::sin(yaw) - std::sin(pose.yaw)),
+          pose.y - v / w * (std::cos(yaw) - std::cos(pose.yaw)), yaw};
+}
+
+cv::Point2d toBase(const Pose& pose, const cv::Point2d& world) {
+  const cv::Point2d d(world.x - pose.x, world.y - pose.y);
+  return {std::cos(pose.yaw) * d.x + std::sin(pose.yaw) * d.y,
+          -std::sin(pose.yaw) * d.x + std::cos(pose.yaw) * d.y};
+}
+
+// A painted line from the origin along +x: straights and arcs sampled every millimetre, with
+// optional unpainted stretches.
+class Course {
+ public:
+  Course& straight(double length) {
+    const int steps = static_cast<int>(std::ceil(length / kStep));
+    for (int i = 0; i < steps; ++i) advance(length / steps, 0.0);
+    return *this;
+  }
+  // Positive turn = left.
+  Course& arc(double radius, double turn_deg) {
+    const double length = radius * std::abs(degrees(turn_deg));
+    const int steps = static_cast<int>(std::ceil(length / kStep));
+    for (int i = 0; i < steps; ++i) advance(length / steps, degrees(turn_deg) / steps);
+    return *this;
+  }
+  Course& gap(double from, double length) {
+    gaps_.push_back({from, from + length});
+    return *this;
+  }
+  double length() const { return arc_length_.back(); }
+
+  // Index of the sample nearest `p` and the distance to the line there (the cross-track error;
+  // gaps count too: they are unpainted, not absent). Searches from 0.2 m behind `hint` to 2 m
+  // beyond it, so a robot's progress stays on its own lap of a course that overlaps itself.
+  std::pair<size_t, double> nearest(const cv::Point2d& p, size_t hint) const {
+    double best = kInf;
+    size_t best_index = 0;
+    const size_t begin = hint > 200 ? hint - 200 : 0;
+    const size_t end = std::min(points_.size() - 1, hint + 2000);
+    for (size_t i = begin; i < end; ++i) {
+      const cv::Point2d segment = points_[i + 1] - points_[i];
+      const double t = std::clamp((p - points_[i]).dot(segment) / segment.dot(segment), 0.0, 1.0);
+      const cv::Point2d d = p - (points_[i] + t * segment);
+      if (d.dot(d) < best) {
+        best = d.dot(d);
+        best_index = i;
+      }
+    }
+    return {best_index, std::sqrt(best)};
+  }
+  double arcLengthAt(size_t index) const { return arc_length_[index]; }
+
+  // What the detector reports for a robot at `pose` (sample `robot_index`): the column where
+  // the line crosses `row`, the first crossing within 3 m ahead that lies in the image.
+  std::optional<double> bandColumn(const CameraGeometry& camera, const Pose& pose,
+                                   size_t robot_index, double row = kBandRow) const {
+    std::optional<cv::Point2d> previous;
+    for (size_t i = robot_index; i < std::min(points_.size(), robot_index + 3000); ++i) {
+      const std::optional<cv::Point2d> pixel = projectToPixel(camera, toBase(pose, points_[i]));
+      if (pixel && previous && (previous->y - row) * (pixel->y - row) <= 0.0 &&
+          previous->y != pixel->y) {
+        const double t = (row - previous->y) / (pixel->y - previous->y);
+        const double u = previous->x + t * (pixel->x - previous->x);
+        if (u >= -0.5 && u <= kWidth - 0.5) {
+          if (painted(arc_length_[i])) return u;
+          return std::nullopt;
+        }
+      }
+      previous = pixel;
+    }
+    return std::nullopt;
+  }
+
+ private:
+  static constexpr double kStep = 0.001;
+
+  void advance(double step, double turn) {
+    if (points_.empty()) {
+      points_.push_back({0.0, 0.0});
+      arc_length_.push_back(0.0);
+    }
+    // Midpoint heading: exact chords of the arc.
+    const double mid = heading_ + 0.5 * turn;
+    const double chord = turn == 0.0 ? step : 2.0 * step / turn * std::sin(0.5 * turn);
+    points_.push_back(points_.back() + chord * cv::Point2d(std::cos(mid), std::sin(mid)));
+    arc_length_.push_back(arc_length_.back() + step);
+    heading_ += turn;
+  }
+  bool painted(double s) const {
+    return std::none_of(gaps_.begin(), gaps_.end(), [&](const std::pair<double, double>& g) {
+      return s >= g.first && s <= g.second;
+    });
+  }
+
+  std::vector<cv::Point2d> points_;
+  std::vector<double> arc_length_;
+  std::vector<std::pair<double, double>> gaps_;
+  double heading_ = 0.0;
+};
+
+// A 20-row band centred on `row` that sees the line's centre at `column`, if given.
+BandMeasurement bandAt(std::optional<double> column, double row) {
+  BandMeasurement measured;
+  measured.row_begin = static_cast<int>(row - 9.5);
+  measured.row_end = measured.row_begin + 20;
+  if (!column) return measured;
+  measured.found = true;
+  measured.pixel_count = 500;
+  measured.centroid_x = *column;
+  measured.centroid_y = row;
+  measured.error_px = *column - kWidth / 2.0;
+  measured.error_normalised = std::clamp(measured.error_px / (kWidth / 2.0), -1.0, 1.0);
+  measured.confidence = 1.0;
+  return measured;
+}
+
+LineMeasurement bandMeasurement(std::optional<double> column) {
+  LineMeasurement m;
+  m.image_width = kWidth;
+  m.image_height = kHeight;
+  m.band = bandAt(column, kBandRow);
+  return m;
+}
+
+LinePathConfig atSpeed(double speed) {
+  LinePathConfig config;
+  config.speed = speed;
+  return config;
+}
+
+struct Trace {
+  double max_error = 0.0;  // m, base centre to the line, after the settling distance
+  double rms_error = 0.0;
+  double final_error = 0.0;
+  double travelled = 0.0;  // m along the line
+  bool always_following = true;
+  std::vector<LineState> states;  // one per frame
+};
+
+struct Scenario {
+  Course course;
+  Pose start;
+  LinePathConfig config;
+  double settle = 1.0;           // m of line before errors count
+  double stop_before_end = 0.6;  // m: stop once the band would look past the end
+  double pixel_noise = 0.0;      // uniform +- px on the centroid
+  double blind_after = kInf;     // s; the camera sees no line from then on
+  bool look_ahead = false;       // also report the look-ahead band
+  double turn_scale = 1.0;       // the robot turns this fraction of the command it was sent
+  double max_time = 60.0;        // s
+};
+
+Trace simulate(const Scenario& scenario) {
+  const CameraGeometry camera = harnessCamera();
+  LinePathFollower follower(scenario.config, camera, LineControllerConfig());
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> noise(-scenario.pixel_noise, scenario.pixel_noise);
+  Pose pose = scenario.start;
+  Twist2D applied;
+  Trace run;
+  double sum_squares = 0.0;
+  int samples = 0;
+  size_t index = 0;
+  for (int frame = 0; frame * kFrameDt < scenario.max_time; ++frame) {
+    double error = 0.0;
+    std::tie(index, error) = scenario.course.nearest({pose.x, pose.y}, index);
+    run.travelled = scenario.course.arcLengthAt(index);
+    if (run.travelled > scenario.course.length() - scenario.stop_before_end) break;
+    if (run.travelled >= scenario.settle) {
+      run.max_error = std::max(run.max_error, error);
+      sum_squares += error * error;
+      ++samples;
+    }
+    run.final_error = error;
+    const bool blind = frame * kFrameDt >= scenario.blind_after;
+    const auto observe = [&](double row) {
+      std::optional<double> column = scenario.course.bandColumn(camera, pose, index, row);
+      if (blind) column.reset();
+      if (column) *column += noise(random);
+      return column;
+    };
+    LineMeasurement measurement = bandMeasurement(observe(kBandRow));
+    if (scenario.look_ahead) measurement.look_ahead = bandAt(observe(kLookAheadRow), kLookAheadRow);
+    applied = follower.update(measurement, frame * kFrameDt, applied);
+    run.states.push_back(follower.state());
+    run.always_following &= follower.state() == LineState::kFollowing;
+    pose = drive(pose, {applied.linear, scenario.turn_scale * applied.angular}, kFrameDt);
+  }
+  run.rms_error = samples > 0 ? std::sqrt(sum_squares / samples) : 0.0;
+  return run;
+}
+
+Course circle() { return Course().arc(0.6, 540.0); }
+Course sBend() { return Course().straight(0.5).arc(0.8, 90.0).arc(0.8, -90.0).straight(1.5); }
+
+// The states visited, each run of repeats collapsed to one.
+std::vector<LineState> transitions(const std::vector<LineState>& states) {
+  std::vector<LineState> sequence;
+  for (LineState state : states) {
+    if (sequence.empty() || sequence.back() != state) sequence.push_back(state);
+  }
+  return sequence;
+}
+
+// Prints the measured errors, for tuning and for the record.
+void report(const std::string& name, double speed, const Trace& run) {
+  std::printf("  %-32s %.1f m/s  max %5.2f mm  rms %5.2f mm  over %.2f m\n", name.c_str(), speed,
+              run.max_error * 1e3, run.rms_error * 1e3, run.travelled);
+}
+
+TEST(LinePathClosedLoop, StraightLine) {
+  Scenario scenario{Course().straight(5.0), Pose(), atSpeed(0.3)};
+  scenario.pixel_noise = 0.5;
+  const Trace run = simulate(scenario);
+  report("straight, +-0.5 px", 0.3, run);
+  EXPECT_TRUE(run.always_following);
+  EXPECT_GT(run.travelled, 4.0);
+  EXPECT_LE(run.max_error, 0.003);
+}
+
+TEST(LinePathClosedLoop, CircleOfRadius60cmAtLowSpeed) {
+  for (double noise : {0.0, 0.5}) {
+    Scenario scenario{circle(), Pose(), atSpeed(0.2)};
+    scenario.pixel_noise = noise;
+    const Trace run = simulate(scenario);
+    report(noise > 0 ? "circle, +-0.5 px" : "circle", 0.2, run);
+    EXPECT_TRUE(run.always_following);
+    EXPECT_GT(run.travelled, 4.0);
+    EXPECT_LE(run.max_error, 0.01);
+    EXPECT_LE(run.rms_error, 0.005);
+  }
+}
+
+TEST(LinePathClosedLoop, SBendAtLowSpeed) {
+  for (double noise : {0.0, 0.5}) {
+    Scenario scenario{sBend(), Pose(), atSpeed(0.2)};
+    scenario.settle = 0.3;
+    scenario.pixel_noise = noise;
+    const Trace run = simulate(scenario);
+    report(noise > 0 ? "S-bend, +-0.5 px" : "S-bend", 0.2, run);
+    EXPECT_TRUE(run.always_following);
+    EXPECT_GT(run.travelled, 3.0);
+    EXPECT_LE(run.max_error, 0.01);
+    EXPECT_LE(run.rms_error, 0.005);
+  }
+}
+
+TEST(LinePathClosedLoop, CircleAndSBendAtTopSpeed) {
+  for (bool s_bend : {false, true}) {
+    Scenario scenario{s_bend ? sBend() : circle(), Pose(), atSpeed(0.7)};
+    scenario.settle = s_bend ? 0.3 : 1.0;
+    scenario.pixel_noise = 0.5;
+    const Trace run = simulate(scenario);
+    report(s_bend ? "S-bend, +-0.5 px" : "circle, +-0.5 px", 0.7, run);
+    EXPECT_TRUE(run.always_following);
+    EXPECT_GT(run.travelled, 3.0);
+    EXPECT_LE(run.max_error, 0.025);
+  }
+}
+
+TEST(LinePathClosedLoop, UsesTheLookAheadBandToo) {
+  for (double speed : {0.2, 0.7}) {
+    Scenario scenario{sBend(), Pose(), atSpeed(speed)};
+    scenario.settle = 0.3;
+    scenario.pixel_noise = 0.5;
+    scenario.look_ahead = true;
+    const Trace run = simulate(scenario);
+    report("S-bend, two bands, +-0.5 px", speed, run);
+    EXPECT_TRUE(run.always_following);
+    EXPECT_GT(run.travelled, 3.0);
+    EXPECT_LE(run.max_error, speed < 0.5 ? 0.01 : 0.025);
+  }
+}
+
+// The memory is dead reckoning from the commands: a robot that turns 5 % more or less than
+// commanded distorts the remembered path, which costs about a centimetre on the curves.
+TEST(LinePathClosedLoop, ToleratesAFewPercentOfTurnRateError) {
+  for (double turn_scale : {0.95, 1.05}) {
+    for (bool s_bend : {false, true}) {
+      Scenario scenario{s_bend ? sBend() : circle(), Pose(), atSpeed(0.2)};
+      scenario.settle = s_bend ? 0.3 : 1.0;
+      scenario.turn_scale = turn_scale;
+      const Trace run = simulate(scenario);
+      report(std::string(s_bend ? "S-bend" : "circle") + ", turning 5 % " +
+                 (turn_scale < 1.0 ? "less" : "more"),
+             0.2, run);
+      EXPECT_TRUE(run.always_following);
+      EXPECT_LE(run.max_error, 0.015);
+    }
+  }
+}
+
+TEST(LinePathClosedLoop, ConvergesFromAnOffsetStart) {
+  // 15 cm beside the line and turned 20 deg toward it, on either side; and parallel to it.
+  for (const Pose& start :
+       {Pose{0.0, 0.15, degrees(-20.0)}, Pose{0.0, -0.15, degrees(20.0)}, Pose{0.0, 0.15, 0.0}}) {
+    for (double end : {1.5, 5.0}) {
+      Scenario scenario{Course().straight(end + 0.6), start, atSpeed(0.3)};
+      scenario.settle = end;
+      const Trace run = simulate(scenario);
+      EXPECT_TRUE(run.always_following);
+      EXPECT_LT(run.final_error, 0.01) << "by " << end << " m, from y " << start.y;
+    }
+  }
+}
+
+// The harness's offset start: 15 cm left and turned 20 deg further away, where the band misses
+// the line's centre. The fallback spins left (it has no side to prefer) until the band sweeps
+// over the line, and the path takes over from there.
+TEST(LinePathClosedLoop, AcquiresTheLineThroughTheFallbackSearch) {
+  Scenario scenario{Course().straight(4.0), Pose{0.0, 0.15, degrees(20.0)}, atSpeed(0.3)};
+  scenario.settle = 2.0;
+  const Trace run = simulate(scenario);
+  report("acquired after a search", 0.3, run);
+  EXPECT_EQ(transitions(run.states),
+            (std::vector<LineState>{LineState::kSearching, LineState::kFollowing}));
+  EXPECT_GT(run.travelled, 3.0);
+  EXPECT_LT(run.max_error, 0.002);
+}
+
+TEST(LinePathClosedLoop, CrossesGapsInTheLine) {
+  struct Case {
+    const char* name;
+    Course course;
+  };
+  for (const Case& c : {Case{"gap on a straight", Course().straight(4.0).gap(2.0, 0.3)},
+                        Case{"gap on a 1 m arc",
+                             Course().straight(1.0).arc(1.0, 120.0).straight(1.0).gap(2.0, 0.3)}}) {
+    for (double speed : {0.2, 0.7}) {
+      Scenario scenario{c.course, Pose(), atSpeed(speed)};
+      scenario.settle = 0.5;
+      scenario.pixel_noise = 0.5;
+      const Trace run = simulate(scenario);
+      report(c.name, speed, run);
+      EXPECT_TRUE(run.always_following) << c.name << " " << speed;
+      EXPECT_GT(run.travelled, c.course.length() - 0.7);
+      EXPECT_LT(run.max_error, 0.02) << c.name << " " << speed;
+    }
+  }
+}
+
+TEST(LinePathFollower, WhenTheLineIsLostTheFallbackSearchesThenGivesUp) {
+  Scenario scenario{Course().straight(20.0), Pose(), atSpeed(0.3)};
+  scenario.blind_after = 2.0;
+  scenario.max_time = 20.0;
+  const std::vector<LineState> states = simulate(scenario).states;
+  EXPECT_EQ(transitions(states),
+            (std::vector<LineState>{LineState::kFollowing, LineState::kLost, LineState::kSearching,
+                                    LineState::kGaveUp}));
+  // The remembered path carries the robot past the last sighting by the band's 0.46 m reach
+  // plus max_extrapolation (0.1 m): about 1.9 s at 0.3 m/s.
+  const auto following = std::count(states.begin(), states.end(), LineState::kFollowing);
+  EXPECT_NEAR(following * kFrameDt, 2.0 + 0.56 / 0.3, 0.2);
+}
+
+TEST(LinePathFollower, NeverSeeingTheLineIsTheFallbacksSearch) {
+  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+  Twist2D applied;
+  std::vector<LineState> states;
+  for (int frame = 0; frame < 30 * 15; ++frame) {
+    applied = follower.update(bandMeasurement(std::nullopt), frame * kFrameDt, applied);
+    states.push_back(follower.state());
+    EXPECT_EQ(follower.pathState().points, 0);
+  }
+  // LineController's rule: with no side to coast toward it searches at once (turning left).
+  EXPECT_EQ(transitions(states),
+            (std::vector<LineState>{LineState::kSearching, LineState::kGaveUp}));
+}
+
+TEST(LinePathFollower, ReportsThePathAtTheBase) {
+  // Robot 5 cm right of a straight line, parallel to it, driving along it.
+  LinePathFollower follower(atSpeed(0.2), harnessCamera(), LineControllerConfig());
+  Course course = Course().straight(3.0);
+  Pose pose{0.0, -0.05, 0.0};
+  const Twist2D straight_on{0.2, 0.0};
+  for (int frame = 0; frame < 90; ++frame) {
+    const auto column =
+        course.bandColumn(harnessCamera(), pose, course.nearest({pose.x, pose.y}, 0).first);
+    follower.update(bandMeasurement(column), frame * kFrameDt, straight_on);
+    pose = drive(pose, straight_on, kFrameDt);
+  }
+  const LinePathFollower::PathState path = follower.pathState();
+  ASSERT_TRUE(path.valid);
+  EXPECT_NEAR(path.lateral, 0.05, 1e-4) << "the path is to the left";
+  EXPECT_NEAR(path.heading, 0.0, 1e-3);
+  EXPECT_NEAR(path.curvature, 0.0, 0.01);
+  EXPECT_GT(path.points, 70);
+  for (const cv::Point2d& point : follower.pathPoints()) {
+    EXPECT_NEAR(point.y, 0.05, 1e-4);
+    EXPECT_GE(point.x, -LinePathConfig().keep_behind);
+  }
+}
+
+TEST(LinePathFollower, EstimatesTheCurvatureOfACircle) {
+  Scenario scenario{circle(), Pose(), atSpeed(0.3)};
+  scenario.max_time = 5.0;
+  LinePathFollower follower(scenario.config, harnessCamera(), LineControllerConfig());
+  Pose pose;
+  Twist2D applied;
+  size_t index = 0;
+  for (int frame = 0; frame < 150; ++frame) {
+    index = scenario.course.nearest({pose.x, pose.y}, index).first;
+    const auto column = scenario.course.bandColumn(harnessCamera(), pose, index);
+    applied = follower.update(bandMeasurement(column), frame * kFrameDt, applied);
+    pose = drive(pose, applied, kFrameDt);
+  }
+  ASSERT_TRUE(follower.pathState().valid);
+  EXPECT_NEAR(follower.pathState().curvature, 1.0 / 0.6, 0.05);
+  EXPECT_NEAR(follower.pathState().heading, 0.0, 0.02);
+}
+
+TEST(LinePathFollower, StampGoingBackwardsForgetsThePath) {
+  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+  for (int frame = 0; frame < 10; ++frame) {
+    follower.update(bandMeasurement(320.0 + frame), 100.0 + frame * kFrameDt, {0.3, 0.0});
+  }
+  EXPECT_EQ(follower.pathState().points, 10);
+  follower.update(bandMeasurement(320.0), 5.0, {0.3, 0.0});
+  EXPECT_EQ(follower.pathState().points, 1);
+}
+
+TEST(LinePathFollower, LongFrameGapOrUnknownMotionForgetsThePath) {
+  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+  double stamp = 0.0;
+  const auto feed = [&](double dt, const Twist2D& applied) {
+    stamp += dt;
+    follower.update(bandMeasurement(320.0), stamp, applied);
+  };
+  for (int frame = 0; frame < 10; ++frame) feed(kFrameDt, {0.3, 0.0});
+  EXPECT_EQ(follower.pathState().points, 10);
+  feed(0.6, {0.3, 0.0});
+  EXPECT_EQ(follower.pathState().points, 1);
+  for (int frame = 0; frame < 10; ++frame) feed(kFrameDt, {0.3, 0.0});
+  feed(kFrameDt, {kNaN, 0.0});
+  EXPECT_EQ(follower.pathState().points, 1);
+}
+
+TEST(LinePathFollower, RepeatedSightingsAreStoredOnce) {
+  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+  for (int frame = 0; frame < 20; ++frame) {
+    follower.update(bandMeasurement(320.0), frame * kFrameDt, Twist2D());  // standing still
+  }
+  EXPECT_EQ(follower.pathState().points, 1);
+  EXPECT_EQ(follower.state(), LineState::kFollowing);
+}
+
+TEST(LinePathFollower, IgnoresUnconfidentAndRejectedFrames) {
+  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+  LineMeasurement weak = bandMeasurement(320.0);
+  weak.band.confidence = 0.1;
+  follower.update(weak, 0.0, Twist2D());
+  LineMeasurement rejected = bandMeasurement(320.0);
+  rejected.error = "empty image";
+  follower.update(rejected, kFrameDt, Twist2D());
+  EXPECT_EQ(follower.pathState().points, 0);
+  EXPECT_NE(follower.state(), LineState::kFollowing);
+}
+
+TEST(LinePathFollower, NeverReturnsNonFiniteUnderGarbage) {
+  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double specials[] = {kNaN, kInf, -kInf, 0.0, -1e300, 1e300, 1e-300};
+  const auto pick = [&](double normal) {
+    return unit(random) < 0.2 ? specials[random() % std::size(specials)] : normal;
+  };
+  double stamp = 0.0;
+  Twist2D applied;
+  for (int frame = 0; frame < 5000; ++frame) {
+    LineMeasurement m = bandMeasurement(pick(640.0 * unit(random)));
+    m.band.centroid_y = pick(480.0 * unit(random));
+    m.band.confidence = pick(unit(random));
+    m.band.error_normalised = pick(m.band.error_normalised);
+    m.look_ahead = m.band;
+    m.look_ahead.centroid_y = pick(264.0);
+    m.look_ahead.found = unit(random) < 0.5;
+    const double r = unit(random);
+    stamp = r < 0.05 ? 0.0 : r < 0.1 ? pick(stamp) : stamp + (r < 0.15 ? 1e6 : kFrameDt);
+    if (unit(random) < 0.2) applied = Twist2D{pick(0.3), pick(1.0)};
+    const Twist2D command = follower.update(m, stamp, applied);
+    ASSERT_TRUE(std::isfinite(command.linear) && std::isfinite(command.angular)) << frame;
+    ASSERT_LE(std::abs(command.angular), 1.5 + 1e-12);
+    const LinePathFollower::PathState& path = follower.pathState();
+    ASSERT_TRUE(std::isfinite(path.lateral) && std::isfinite(path.heading) &&
+                std::isfinite(path.curvature));
+    applied = command;
+  }
+}
+
+TEST(LinePathFollower, RejectsInvalidConfiguration) {
+  const auto throws = [](const LinePathConfig& config, const CameraGeometry& camera,
+                         const LineControllerConfig& fallback) {
+    try {
+      LinePathFollower follower(config, camera, fallback);
+    } catch (const std::invalid_argument&) {
+      return true;
+    }
+    return false;
+  };
+  EXPECT_FALSE(throws(LinePathConfig(), CameraGeometry(), LineControllerConfig()));
+  EXPECT_EQ(validate(LinePathConfig()), "");
+
+  LinePathConfig config;
+  config.speed = 0.0;
+  EXPECT_NE(validate(config).find("speed"), std::string::npos);
+  EXPECT_TRUE(throws(config, CameraGeometry(), LineControllerConfig()));
+  config = LinePathConfig();
+  config.min_speed = 0.5;  // above speed
+  EXPECT_NE(validate(config).find("min_speed"), std::string::npos);
+  config = LinePathConfig();
+  config.lateral_gain = kNaN;
+  EXPECT_NE(validate(config).find("lateral_gain"), std::string::npos);
+  config = LinePathConfig();
+  config.max_points = 2;
+  EXPECT_NE(validate(config).find("max_points"), std::string::npos);
+  config = LinePathConfig();
+  config.fit_length = -0.1;
+  EXPECT_NE(validate(config).find("fit_length"), std::string::npos);
+
+  CameraGeometry camera;
+  camera.height_m = 0.0;
+  EXPECT_TRUE(throws(LinePathConfig(), camera, LineControllerConfig()));
+  LineControllerConfig fallback;
+  fallback.kp = -1.0;
+  EXPECT_TRUE(throws(LinePathConfig(), CameraGeometry(), fallback));
+}
+
+TEST(LinePathFollower, FallbackAlwaysRunsThePdSearch) {
+  LineControllerConfig lecture;
+  lecture.mode = ControlMode::kLecture;
+  LinePathFollower follower(LinePathConfig(), harnessCamera(), lecture);
+  const Twist2D command = follower.update(bandMeasurement(std::nullopt), 0.0, Twist2D());
+  EXPECT_EQ(follower.state(), LineState::kSearching);
+  EXPECT_GT(command.angular, 0.0);
+}
+
+}  // namespace
+}  // namespace follow_bot

@@ -1,0 +1,34 @@
+"""Issue 4's scenarios: the follower in the closed loop, judged by each scenario's criteria.
+
+Every scenario in worlds/scenarios/follower_*.yaml is played by run_scenario (its own roscore,
+the follower launch file, the simulator in lockstep); the test reads result.json and fails
+with every unmet criterion listed.
+"""
+
+import json
+import subprocess
+from pathlib import Path
+
+import pytest
+
+SCENARIOS = sorted(
+    (Path(__file__).resolve().parents[1] / "worlds" / "scenarios").glob("follower_*.yaml")
+)
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS, ids=[p.stem for p in SCENARIOS])
+def test_follower_scenario(scenario, tmp_path):
+    subprocess.run(
+        ["rosrun", "harness", "run_scenario", str(scenario), "--out", str(tmp_path)],
+        timeout=600,
+        stdout=subprocess.DEVNULL,
+    )  # its exit code only repeats what result.json says
+    result = json.loads((tmp_path / scenario.stem / "result.json").read_text())
+    failed = [f"{c['metric']} = {c['value']} (want {c['rule']})" for c in result["criteria"]
+              if not c["passed"]]  # fmt: skip
+    assert not failed, f"{scenario.stem}: " + "; ".join(failed)
+    # Every run, whatever its own criteria: no command beyond the limits, none non-finite.
+    commands = result["metrics"]["commands"]
+    assert commands["non_finite"] == 0
+    assert commands["max_abs_v"] <= 0.7 + 1e-9
+    assert commands["max_abs_w"] <= 3.14159266
