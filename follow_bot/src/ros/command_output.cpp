@@ -32,7 +32,10 @@ CommandOutput::~CommandOutput() {
   stop();
 }
 
-void CommandOutput::frameArrived() { watchdog_.frameArrived(ros::Time::now().toSec()); }
+void CommandOutput::frameArrived() {
+  ++frames_since_check_;
+  watchdog_.frameArrived(ros::Time::now().toSec());
+}
 
 Twist2D CommandOutput::send(const Twist2D& desired, const ros::Time& stamp) {
   const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
@@ -56,6 +59,10 @@ void CommandOutput::publish(const Twist2D& command) {
 
 void CommandOutput::checkWatchdog(const ros::TimerEvent&) {
   const double now = ros::Time::now().toSec();
+  // Frames handled since the last check prove the camera is alive whatever the clock says: under
+  // load the /clock thread can lag the image callbacks, so frames get stamped with a stale time.
+  if (frames_since_check_ > 0) watchdog_.frameArrived(now);
+  frames_since_check_ = 0;
   if (watchdog_.shouldSendStop(now)) {
     ROS_WARN("no camera frame since t=%.3f s (now %.3f s, timeout %.2f s): stopping the robot",
              watchdog_.lastFrame(), now, watchdog_.timeout());

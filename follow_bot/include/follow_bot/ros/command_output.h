@@ -39,6 +39,7 @@ class CommandOutput {
   VelocityLimiter limiter_;
   FrameWatchdog watchdog_;
   ros::Time last_stamp_;
+  int frames_since_check_ = 0;
 };
 
 }  // namespace follow_bot
