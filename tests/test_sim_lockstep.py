@@ -55,3 +55,17 @@ def test_result_json_and_plot_are_written(runs):
     assert result["passed"] is True
     assert math.isclose(result["metrics"]["sim_time"], 4.0)
     assert (out / "constant_arc" / "run.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("world", ["rgb", "dumpster", "parking"])
+def test_every_shipped_world_plays_with_the_scripted_driver(world, tmp_path):
+    scenario = SCENARIO.parent / f"drive_{world}.yaml"
+    subprocess.run(
+        ["rosrun", "harness", "run_scenario", str(scenario), "--out", str(tmp_path)],
+        check=True,
+        timeout=300,
+        stdout=subprocess.DEVNULL,
+    )
+    out = tmp_path / f"drive_{world}"
+    assert json.loads((out / "result.json").read_text())["passed"] is True
+    assert (out / "run.png").stat().st_size > 10_000

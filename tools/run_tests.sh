@@ -5,8 +5,10 @@ set -uo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 build=$repo/build
 venv=${FOLLOW_BOT_VENV:-$repo/.venv}
+set +u  # ROS's setup scripts read unset variables
 # shellcheck disable=SC1091
 source "$build/devel/setup.bash"
+set -u
 rm -rf "$build/test_results" "$build/catkin/test_results"
 mkdir -p "$build/test_results"
 status=0
