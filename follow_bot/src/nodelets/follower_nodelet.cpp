@@ -12,6 +12,7 @@
 #include <cv_bridge/cv_bridge.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
+#include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <pluginlib/class_list_macros.hpp>
@@ -120,6 +121,8 @@ class FollowerNodelet : public nodelet::Nodelet {
     camera_ = readMounting(pnh);
     output_ = std::make_unique<CommandOutput>(nh, pnh);
     camera_info_sub_ = nh.subscribe("camera_info", 1, &FollowerNodelet::onCameraInfo, this);
+    pnh.param("use_odom", use_odom_, false);
+    if (use_odom_) odom_sub_ = nh.subscribe("odom", 1, &FollowerNodelet::onOdometry, this);
 
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<FollowerConfig>>(mutex_, pnh);
     reconfigure_->setCallback([this](FollowerConfig& config, uint32_t) { reconfigure(config); });
@@ -171,9 +174,23 @@ class FollowerNodelet : public nodelet::Nodelet {
     if (changed) apply(settings_);
   }
 
+  // The base's measured motion: better than the commands for path mode's memory whenever the
+  // base lags or slips.
+  void onOdometry(const nav_msgs::OdometryConstPtr& odom) {
+    std::lock_guard<boost::recursive_mutex> lock(mutex_);
+    odom_twist_ = Twist2D{odom->twist.twist.linear.x, odom->twist.twist.angular.z};
+    has_odom_ = true;
+  }
+
   // The law for this frame: path mode needs intrinsics; until they arrive it steers with pd.
   Twist2D steer(const LineMeasurement& seen, double stamp) {
-    if (path_follower_) return path_follower_->update(seen, stamp, last_command_);
+    if (path_follower_) {
+      if (use_odom_ && !has_odom_) {
+        NODELET_WARN_THROTTLE(5.0, "~use_odom: no odometry on %s yet, using the commands sent",
+                              odom_sub_.getTopic().c_str());
+      }
+      return path_follower_->update(seen, stamp, has_odom_ ? odom_twist_ : last_command_);
+    }
     if (settings_.path_mode) {
       NODELET_WARN_THROTTLE(5.0, "path mode: no valid camera_info on %s yet, steering with pd",
                             camera_info_sub_.getTopic().c_str());
@@ -240,6 +257,10 @@ class FollowerNodelet : public nodelet::Nodelet {
   bool has_intrinsics_ = false;
   Twist2D last_command_;  // what the robot was told to do since the previous frame
   ros::Subscriber camera_info_sub_;
+  bool use_odom_ = false;
+  bool has_odom_ = false;
+  Twist2D odom_twist_;
+  ros::Subscriber odom_sub_;
   std::unique_ptr<CommandOutput> output_;
   std::unique_ptr<dynamic_reconfigure::Server<FollowerConfig>> reconfigure_;
   ros::Publisher status_pub_;

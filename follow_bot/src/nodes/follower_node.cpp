@@ -6,5 +6,6 @@ int main(int argc, char** argv) {
   return image_converter::runNodelet(argc, argv, "follower", follow_bot::makeFollowerNodelet(),
                                      {{"image", "/camera/rgb/image_raw"},
                                       {"camera_info", "/camera/rgb/camera_info"},
-                                      {"cmd_vel", "/cmd_vel"}});
+                                      {"cmd_vel", "/cmd_vel"},
+                                      {"odom", "/odom"}});
 }
