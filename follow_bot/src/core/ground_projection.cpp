@@ -3,24 +3,12 @@
 #include <cmath>
 #include <sstream>
 
+#include "follow_bot/config_checks.h"
+
 namespace follow_bot {
 namespace {
 
 constexpr double kMaxPitchRad = 89.0 * 3.14159265358979323846 / 180.0;
-
-std::string requirePositive(const char* name, double value) {
-  if (std::isfinite(value) && value > 0.0) return "";
-  std::ostringstream message;
-  message << name << " must be finite and > 0, got " << value;
-  return message.str();
-}
-
-std::string requireFinite(const char* name, double value) {
-  if (std::isfinite(value)) return "";
-  std::ostringstream message;
-  message << name << " must be finite, got " << value;
-  return message.str();
-}
 
 }  // namespace
 

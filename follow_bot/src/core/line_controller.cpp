@@ -5,33 +5,14 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "follow_bot/config_checks.h"
+
 namespace follow_bot {
 namespace {
 
 // The lecture's constants.
 constexpr double kLectureLinear = 0.2;              // m/s
 constexpr double kLecturePixelsPerRadPerS = 100.0;  // angular = -error_px / 100
-
-std::string requireAtLeast(const char* name, double value, double min) {
-  if (std::isfinite(value) && value >= min) return "";
-  std::ostringstream message;
-  message << name << " must be >= " << min << ", got " << value;
-  return message.str();
-}
-
-std::string requirePositive(const char* name, double value) {
-  if (std::isfinite(value) && value > 0.0) return "";
-  std::ostringstream message;
-  message << name << " must be > 0, got " << value;
-  return message.str();
-}
-
-std::string requireInRange(const char* name, double value, double min, double max) {
-  if (std::isfinite(value) && value >= min && value <= max) return "";
-  std::ostringstream message;
-  message << name << " must be in [" << min << ", " << max << "], got " << value;
-  return message.str();
-}
 
 std::string requireAtMostMaxLinear(const char* name, double value, double max_linear) {
   if (value <= max_linear) return "";

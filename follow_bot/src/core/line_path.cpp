@@ -3,8 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
+
+#include "follow_bot/config_checks.h"
 
 namespace follow_bot {
 namespace {
@@ -12,27 +13,6 @@ namespace {
 // Below this turn per frame the exact arc loses precision to cancellation; its series is exact
 // to double precision there.
 constexpr double kSmallTurnRad = 1e-6;
-
-std::string requirePositive(const char* name, double value) {
-  if (std::isfinite(value) && value > 0.0) return "";
-  std::ostringstream message;
-  message << name << " must be finite and > 0, got " << value;
-  return message.str();
-}
-
-std::string requireAtLeast(const char* name, double value, double min) {
-  if (std::isfinite(value) && value >= min) return "";
-  std::ostringstream message;
-  message << name << " must be >= " << min << ", got " << value;
-  return message.str();
-}
-
-std::string requireInRange(const char* name, double value, double min, double max) {
-  if (std::isfinite(value) && value >= min && value <= max) return "";
-  std::ostringstream message;
-  message << name << " must be in [" << min << ", " << max << "], got " << value;
-  return message.str();
-}
 
 bool isFinite(const cv::Point2d& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 

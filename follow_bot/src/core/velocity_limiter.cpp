@@ -2,18 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
+
+#include "follow_bot/config_checks.h"
 
 namespace follow_bot {
 namespace {
-
-std::string requirePositive(const char* name, double value) {
-  if (std::isfinite(value) && value > 0.0) return "";
-  std::ostringstream message;
-  message << name << " must be finite and > 0, got " << value;
-  return message.str();
-}
 
 double finiteOrZero(double value) { return std::isfinite(value) ? value : 0.0; }
 
