@@ -6,3 +6,5 @@ echo "== follower line detector vs the lecture's algorithm (same frames, one thr
 "$repo/build/devel/lib/follow_bot/line_detector_bench"
 echo "== harness"
 "$repo/harness/scripts/run_python" harness.bench
+echo "== follower image -> cmd_vel latency, across processes and between nodelets (probe nodelet)"
+"$repo/tools/bench_latency.sh"

@@ -1,17 +1,17 @@
 // Latency probe: stands in for the camera and the base around a behaviour nodelet.
 //
-// Publishes ~frames synthetic 640x480 bgr8 frames (a yellow line on grey, drifting a little) on
-// `image` at ~rate Hz and listens on `cmd_vel`. The follower answers each frame with exactly one
-// Twist, in order, so a frame's latency is the steady-clock time from just before publish() to
-// the receipt of the next Twist (the header stamp plays no part). Frames go out as ImagePtr, so
-// inside one nodelet manager they are handed over without a copy. After ~warmup frames that are
-// not counted and ~frames counted ones it prints
+// Publishes ~warmup + ~frames synthetic 640x480 bgr8 frames (a yellow line on grey, drifting a
+// little) on `image` at ~rate Hz and listens on `cmd_vel`. The follower answers each frame with
+// exactly one Twist, in order, so a frame's latency is the steady-clock time from just before
+// publish() to the receipt of its Twist (the header stamp plays no part). Frames go out as
+// ImagePtr, so inside one nodelet manager they are handed over without a copy. After the
+// uncounted warm-up and ~frames timed frames it prints
 //   latency <~label>: median X us, p99 Y us, n=N (goal ...)
 // on stdout and shuts ROS down (the whole process: standalone, or the manager it runs in).
 //
 // Parameters (private): ~frames (600), ~warmup (30), ~rate (30 Hz), ~label ("probe"),
 // ~goal_median_us, ~goal_p99_us (<= 0: no goal), ~tcp_nodelay (true: cmd_vel without Nagle),
-// ~connect_timeout (10 s to see the follower on both topics).
+// ~connect_timeout (10 s to see the follower on both topics), ~answer_timeout (0.1 s).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -19,6 +19,7 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -97,6 +98,8 @@ class LatencyProbeNodelet : public nodelet::Nodelet {
     goal_median_us_ = pnh.param("goal_median_us", 0.0);
     goal_p99_us_ = pnh.param("goal_p99_us", 0.0);
     connect_timeout_ = pnh.param("connect_timeout", 10.0);
+    answer_timeout_ = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(pnh.param("answer_timeout", 0.1)));
     if (!std::isfinite(rate) || rate <= 0.0) {
       throw std::invalid_argument("~rate must be > 0, got " + std::to_string(rate));
     }
@@ -113,7 +116,13 @@ class LatencyProbeNodelet : public nodelet::Nodelet {
     std::lock_guard<std::mutex> lock(mutex_);
     if (done_) return;
     if (!connected_ && !waitForConnections()) return;
-    if (sent_at_ && frame_index_ >= warmup_) ++lost_;  // no answer within a period
+    if (sent_at_) {
+      // One frame in flight: a late answer delays the next frame rather than being matched to
+      // it. Past ~answer_timeout (below the follower's 0.15 s watchdog) the frame counts as lost.
+      if (Clock::now() - *sent_at_ < answer_timeout_) return;
+      if (frame_index_ >= warmup_) ++lost_;
+      sent_at_.reset();
+    }
     if (sent_ >= warmup_ + frames_) {
       finish();
       return;
@@ -192,6 +201,7 @@ class LatencyProbeNodelet : public nodelet::Nodelet {
   double goal_median_us_ = 0.0;
   double goal_p99_us_ = 0.0;
   double connect_timeout_ = 10.0;
+  Clock::duration answer_timeout_;
   Clock::time_point started_;
   bool seen_linked_ = false;
   bool connected_ = false;
