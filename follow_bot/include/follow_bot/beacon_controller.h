@@ -1,0 +1,227 @@
+// Colour-beacon behaviours on top of ColourBlobDetector: range and bearing to a known object,
+// and a controller for the lecture's two beacon tasks (Lab 5: follow green, stop on red;
+// Exercise 10: drive up to an object and stop facing it at a set distance).
+//
+// Conventions: base_link and the camera follow ground_projection.h. The bearing of a pixel
+// column u is atan((u - cx) / fx), positive when the object is right of the optical axis (as
+// the line controller's error), so steering toward it is angular = -k * bearing (REP-103:
+// positive angular turns left).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "follow_bot/colour_blobs.h"
+#include "follow_bot/ground_projection.h"
+#include "follow_bot/velocity_limiter.h"
+
+namespace follow_bot {
+
+// ---- Range to an object --------------------------------------------------------------------
+
+enum class BeaconShape {
+  kSphere,  // a ball resting on the floor
+  kBox,     // a box standing on the floor, one vertical face toward the camera
+};
+
+// "sphere" / "box", and back.
+std::optional<BeaconShape> parseBeaconShape(const std::string& name);
+const char* toString(BeaconShape shape);
+
+struct BeaconObject {
+  BeaconShape shape = BeaconShape::kBox;
+  // Sphere: its radius. Box: the width of the face toward the camera. Default: the dumpster
+  // world's 1.8 m wide box.
+  double size_m = 1.8;
+};
+
+// Empty when the object is usable, otherwise a message naming the first bad field.
+std::string validate(const BeaconObject& object);
+
+// Ranges are the horizontal distance from base_link's origin (the robot's centre) to the
+// object's footprint on the floor: for a sphere, the distance to its centre minus its radius;
+// for a box, the distance to the nearest point of its rectangle. This is what the harness
+// scores as the target's final_distance.
+struct RangeEstimate {
+  // From the apparent size. Sphere: exact (see sphereCentreFromCircle), needs the whole ball in
+  // the frame. Box: rangeFromWidth on the bounding-box width plus the camera's x offset, which
+  // assumes a level camera looking squarely at the face; needs both sides of the box in the
+  // frame.
+  std::optional<double> from_size;
+  // Box only: the nearest floor point on the blob's outline, each outline pixel's centre put
+  // through pixelToGround. Outline points above the floor project beyond the object, so the
+  // minimum is the nearest visible floor contact, right for any view of the face while the
+  // nearest point of the footprint is in the frame. Needs the bottom edge in the frame (below
+  // the horizon, not touching the last row). Pixel centres rather than lower edges, because
+  // the harness draws box faces with cv::fillConvexPoly(LINE_AA), which spills about half a
+  // pixel past the true edge: on its dumpster frames this reads within 4 mm at 1 m (one row is
+  // 6 mm there, 10 cm at 6 m). A ball's outline meets the floor behind its nearest point, so
+  // spheres leave this empty.
+  std::optional<double> from_ground;
+
+  // The controller's choice: a box's ground-contact range (its face is wider than the frame
+  // near the default stop distance, 1.8 m at 1 m spans ~1000 px, and the contact row is
+  // exact), falling back to its width; a sphere's size range.
+  std::optional<double> best() const { return from_ground ? from_ground : from_size; }
+};
+
+// The depth along the optical axis of a face of `width_m` seen squarely, spanning `width_px`
+// pixels with focal length `focal_px`: focal_px * width_m / width_px. Empty unless all are
+// finite and > 0.
+std::optional<double> rangeFromWidth(double focal_px, double width_m, double width_px);
+
+// The centre of a sphere of radius `radius_m` in base_link, from the minimum enclosing circle
+// of its silhouette. Exact for a pinhole camera: the silhouette is an ellipse whose major axis
+// lies on the line through the principal point, so its enclosing circle's ends on that line
+// are the rays at theta -+ alpha from the optical axis, where theta is the angle to the
+// sphere's centre and alpha its angular radius; the optical centre is radius_m / sin(alpha)
+// from the centre. (The familiar f * r / radius_px is that distance times cos(alpha): 2 % short
+// 1 m from a 0.2 m ball's centre, and more off-axis, where the ellipse stretches.) Uses
+// the mean focal length sqrt(fx * fy). Empty for a non-positive radius or unusable input.
+std::optional<cv::Point3d> sphereCentreFromCircle(const CameraGeometry& camera,
+                                                  const cv::Point2d& circle_centre,
+                                                  double circle_radius_px, double radius_m);
+
+// Both range estimates for a found blob of `object` in a frame of the given size (an estimate
+// whose condition above fails is left empty; a blob that is not found gives neither).
+RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_height,
+                            const CameraGeometry& camera, const BeaconObject& object);
+
+// ---- Controller ----------------------------------------------------------------------------
+
+enum class BeaconMode {
+  // Lab 5: search for green, drive toward it until it looks big, stop while red is in view.
+  kFollowGreenStopRed,
+  // Exercise 10: drive up to one object and stop stop_distance from it, facing it.
+  kApproach,
+};
+
+// "follow_green_stop_red" / "approach" (the spelling of ROS parameters), and back.
+std::optional<BeaconMode> parseBeaconMode(const std::string& name);
+const char* toString(BeaconMode mode);
+
+enum class BeaconState {
+  kSearching,     // the target is not in view: spin in place toward where it was last seen
+  kApproaching,   // the target is in view: turn toward it and drive
+  kHolding,       // follow mode: the target looks close (area >= close_area), stand still
+  kStoppedByRed,  // follow mode: the stop colour is in view, stand still
+  kLost,          // approach mode: the target just vanished, stand still for lost_hold s
+  kArrived,       // approach mode: at stop_distance and facing the target, stand still
+};
+const char* toString(BeaconState state);
+
+struct BeaconControllerConfig {
+  BeaconMode mode = BeaconMode::kFollowGreenStopRed;
+  double search_rate = 0.5;  // rad/s, spin while the target is out of view
+
+  // Follow mode. Colour names refer to the detector's ColourSpec names.
+  std::string follow_colour = "green";
+  std::string stop_colour = "red";
+  // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre.
+  double close_area = 30000.0;   // px^2: hold once the follow blob is at least this big
+  double stop_min_area = 500.0;  // px^2: a stop blob at least this big stops the robot
+  // The robot stays stopped this long after the stop colour was last seen, so one frame that
+  // misses it does not let the robot lurch forward.
+  double stop_release_delay = 0.3;  // s
+  double approach_speed = 0.2;      // m/s
+  // angular = -turn_gain * e with e = (centroid_x - width / 2) / (width / 2) in [-1, 1]; e = 1
+  // is the image edge, 30 deg off the axis, for the harness camera.
+  double turn_gain = 1.5;  // rad/s per unit of normalised error
+
+  // Approach mode.
+  std::string target_colour = "green";
+  BeaconObject target;
+  // The rgb and dumpster worlds' camera: the harness defaults, level (no camera block means
+  // pitch_deg 0). Set from CameraInfo and the camera's mounting.
+  CameraGeometry camera = [] {
+    CameraGeometry level;
+    level.pitch_rad = 0.0;
+    return level;
+  }();
+  double stop_distance = 1.0;  // m, target range (see RangeEstimate) to stop at
+  // linear = k_range * (range - stop_distance), clamped to [0, max_speed] (to
+  // [-max_speed, max_speed] with allow_reverse): a first-order approach, no overshoot.
+  double k_range = 0.8;    // 1/s
+  double max_speed = 0.3;  // m/s
+  bool allow_reverse = false;
+  // The linear speed is scaled by max(0, 1 - |bearing| / speed_taper_bearing), so a robot
+  // facing away turns toward the object before driving and arrives along a straight line: a
+  // sideways drift would show later as a bearing error, once a box too close to fit in the
+  // frame no longer shows its centre.
+  double speed_taper_bearing = 0.2;  // rad
+  double k_bearing = 2.0;            // angular = -k_bearing * bearing, rad/s per rad
+  double max_turn_rate = 1.0;        // rad/s, bound on that angular
+  // Arrived when |range - stop_distance| and |bearing| are below these. The robot closes in
+  // from one side and stops on the first frame inside, so it ends near the tolerance: half of
+  // the 1 cm goal leaves room for the range's pixel quantisation (6 mm per row at 1 m).
+  double distance_tolerance = 0.005;                                // m
+  double bearing_tolerance = 1.0 * 3.14159265358979323846 / 180.0;  // rad
+  double lost_hold = 1.0;  // s to stand still after losing the target before searching
+};
+
+// Empty when the configuration is usable, otherwise a message naming the first bad field,
+// e.g. "stop_distance must be > 0, got 0".
+std::string validate(const BeaconControllerConfig& config);
+
+// Empty when every colour the controller's mode uses is one the detector measures, otherwise a
+// message naming the missing colour (the controller treats a missing colour as never seen).
+std::string checkColoursDetected(const BeaconControllerConfig& controller,
+                                 const ColourBlobConfig& detector);
+
+class BeaconController {
+ public:
+  // Throws std::invalid_argument with the validate() message when the configuration is unusable.
+  explicit BeaconController(const BeaconControllerConfig& config = BeaconControllerConfig());
+
+  // The command for one frame's blobs. `stamp` is the frame's time in seconds. Never returns a
+  // non-finite value. A non-finite stamp or a rejected frame (blobs.ok() false) gives a zero
+  // twist and leaves the state alone; a stamp earlier than the previous one (sim or bag
+  // restart) resets the controller first.
+  //
+  // Follow mode, in priority order: a stop-colour blob (found, area >= stop_min_area) in view
+  // or seen within stop_release_delay -> zero, kStoppedByRed; no follow-colour blob ->
+  // kSearching; area >= close_area -> zero, kHolding; otherwise kApproaching: approach_speed
+  // and angular = -turn_gain * e.
+  //
+  // Approach mode: with the target in view, bearing from its column and range from
+  // estimateRange().best(). A sphere's column is its centroid; a box's is the middle of its
+  // silhouette, because seen obliquely its nearer face outweighs the rest and pulls the
+  // centroid off the box's centre (~3 deg at the stop point from 30 deg off its axis). Arrived
+  // (zero, kArrived) when both are within tolerance; otherwise kApproaching with the linear and
+  // angular laws of the config. Without a range (too close to see its bottom edge, or partly out of
+  // frame) it only turns. A box spilling over both sides of the frame has no observable centre, so
+  // its bearing counts as zero. When the target vanishes after being seen the robot stands still
+  // (kLost) for lost_hold s, then searches; a controller that has never seen it searches at once
+  // (to the left).
+  Twist2D update(const BlobResult& blobs, double stamp);
+
+  BeaconState state() const { return state_; }
+  // The last range and bearing used in approach mode (empty when the target was not seen).
+  const std::optional<double>& lastRange() const { return last_range_; }
+  const std::optional<double>& lastBearing() const { return last_bearing_; }
+  const BeaconControllerConfig& config() const { return config_; }
+
+  // Forgets all history, as if newly constructed.
+  void reset();
+
+ private:
+  Twist2D followGreenStopRed(const BlobResult& blobs, double stamp);
+  Twist2D approach(const BlobResult& blobs, double stamp);
+  Twist2D search();
+
+  BeaconControllerConfig config_;
+  BeaconState state_ = BeaconState::kSearching;
+  bool has_stamp_ = false;
+  double last_stamp_ = 0.0;
+  bool stop_seen_ = false;
+  double stop_last_seen_ = 0.0;
+  bool target_seen_ = false;
+  double target_last_seen_ = 0.0;
+  double search_direction_ = 1.0;  // +1 left, -1 right: toward where the target was last seen
+  std::optional<double> last_range_;
+  std::optional<double> last_bearing_;
+};
+
+}  // namespace follow_bot

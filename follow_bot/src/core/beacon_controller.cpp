@@ -1,0 +1,306 @@
+#include "follow_bot/beacon_controller.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "follow_bot/config_checks.h"
+
+namespace follow_bot {
+namespace {
+
+std::string prefixed(const char* prefix, const std::string& error) {
+  return error.empty() ? error : prefix + error;
+}
+
+std::string requireName(const char* name, const std::string& value) {
+  return value.empty() ? std::string(name) + " must not be empty" : "";
+}
+
+// The blob of a colour when it is found and at least min_area big, else nullptr.
+const ColourBlob* seen(const BlobResult& blobs, const std::string& name, double min_area) {
+  const ColourBlob* blob = blobs.find(name);
+  if (blob == nullptr || !blob->found || blob->area < min_area) return nullptr;
+  if (!std::isfinite(blob->centroid.x) || !std::isfinite(blob->centroid.y)) return nullptr;
+  return blob;
+}
+
+bool isFinite(const cv::Point2d& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
+
+}  // namespace
+
+std::optional<BeaconShape> parseBeaconShape(const std::string& name) {
+  if (name == "sphere") return BeaconShape::kSphere;
+  if (name == "box") return BeaconShape::kBox;
+  return std::nullopt;
+}
+
+const char* toString(BeaconShape shape) {
+  switch (shape) {
+    case BeaconShape::kSphere:
+      return "sphere";
+    case BeaconShape::kBox:
+      return "box";
+  }
+  return "unknown";
+}
+
+std::string validate(const BeaconObject& object) {
+  return requirePositive("size_m", object.size_m);
+}
+
+std::optional<double> rangeFromWidth(double focal_px, double width_m, double width_px) {
+  if (!(focal_px > 0.0) || !(width_m > 0.0) || !(width_px > 0.0)) return std::nullopt;
+  const double range = focal_px * width_m / width_px;
+  if (!std::isfinite(range)) return std::nullopt;
+  return range;
+}
+
+std::optional<cv::Point3d> sphereCentreFromCircle(const CameraGeometry& camera,
+                                                  const cv::Point2d& circle_centre,
+                                                  double circle_radius_px, double radius_m) {
+  if (!(radius_m > 0.0) || !(circle_radius_px > 0.0) || !isFinite(circle_centre) ||
+      !validate(camera).empty()) {
+    return std::nullopt;
+  }
+  // Normalised image coordinates; the circle's ends on the line through the principal point
+  // are c - a and c + a from it.
+  const double x = (circle_centre.x - camera.cx) / camera.fx;
+  const double y = (circle_centre.y - camera.cy) / camera.fy;
+  const double c = std::hypot(x, y);
+  const double a = circle_radius_px / std::sqrt(camera.fx * camera.fy);
+  const double near_edge = std::atan(c - a);
+  const double far_edge = std::atan(c + a);
+  const double alpha = 0.5 * (far_edge - near_edge);  // angular radius
+  const double theta = 0.5 * (far_edge + near_edge);  // angle of the centre off the axis
+  if (!(alpha > 0.0)) return std::nullopt;
+  const double distance = radius_m / std::sin(alpha);
+  const double phi = std::atan2(y, x);
+  // The centre in the optical frame (x right, y down, z forward) ...
+  const double right = distance * std::sin(theta) * std::cos(phi);
+  const double down = distance * std::sin(theta) * std::sin(phi);
+  const double forward = distance * std::cos(theta);
+  // ... and in base_link (axes as in ground_projection.h).
+  const double sin_p = std::sin(camera.pitch_rad);
+  const double cos_p = std::cos(camera.pitch_rad);
+  const cv::Point3d centre(camera.x_offset_m + forward * cos_p - down * sin_p, -right,
+                           camera.height_m - forward * sin_p - down * cos_p);
+  if (!std::isfinite(centre.x) || !std::isfinite(centre.y) || !std::isfinite(centre.z)) {
+    return std::nullopt;
+  }
+  return centre;
+}
+
+RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_height,
+                            const CameraGeometry& camera, const BeaconObject& object) {
+  RangeEstimate estimate;
+  if (!blob.found || !(object.size_m > 0.0)) return estimate;
+  const cv::Rect& box = blob.bounding_box;
+  const bool cut_left = box.x <= 0;
+  const bool cut_right = box.x + box.width >= image_width;
+  const bool cut_top = box.y <= 0;
+  const bool cut_bottom = box.y + box.height >= image_height;
+
+  if (object.shape == BeaconShape::kSphere) {
+    if (cut_left || cut_right || cut_top || cut_bottom) return estimate;
+    const std::optional<cv::Point3d> centre = sphereCentreFromCircle(
+        camera, cv::Point2d(blob.circle_centre), blob.circle_radius, object.size_m);
+    if (centre)
+      estimate.from_size = std::max(0.0, std::hypot(centre->x, centre->y) - object.size_m);
+    return estimate;
+  }
+
+  if (!cut_left && !cut_right) {
+    const std::optional<double> depth = rangeFromWidth(camera.fx, object.size_m, box.width);
+    if (depth) estimate.from_size = std::max(0.0, *depth + camera.x_offset_m);
+  }
+  if (!cut_bottom) {
+    for (const cv::Point& pixel : blob.contour) {
+      const std::optional<cv::Point2d> floor = pixelToGround(camera, pixel.x, pixel.y);
+      if (!floor) continue;
+      const double range = std::hypot(floor->x, floor->y);
+      if (!estimate.from_ground || range < *estimate.from_ground) estimate.from_ground = range;
+    }
+  }
+  return estimate;
+}
+
+std::optional<BeaconMode> parseBeaconMode(const std::string& name) {
+  if (name == "follow_green_stop_red") return BeaconMode::kFollowGreenStopRed;
+  if (name == "approach") return BeaconMode::kApproach;
+  return std::nullopt;
+}
+
+const char* toString(BeaconMode mode) {
+  switch (mode) {
+    case BeaconMode::kFollowGreenStopRed:
+      return "follow_green_stop_red";
+    case BeaconMode::kApproach:
+      return "approach";
+  }
+  return "unknown";
+}
+
+const char* toString(BeaconState state) {
+  switch (state) {
+    case BeaconState::kSearching:
+      return "SEARCHING";
+    case BeaconState::kApproaching:
+      return "APPROACHING";
+    case BeaconState::kHolding:
+      return "HOLDING";
+    case BeaconState::kStoppedByRed:
+      return "STOPPED_BY_RED";
+    case BeaconState::kLost:
+      return "LOST";
+    case BeaconState::kArrived:
+      return "ARRIVED";
+  }
+  return "UNKNOWN";
+}
+
+std::string validate(const BeaconControllerConfig& c) {
+  for (const std::string& error : {
+           requireAtLeast("search_rate", c.search_rate, 0.0),
+           requireName("follow_colour", c.follow_colour),
+           requireName("stop_colour", c.stop_colour),
+           c.follow_colour == c.stop_colour && !c.follow_colour.empty()
+               ? "follow_colour and stop_colour must differ, both are '" + c.follow_colour + "'"
+               : "",
+           requireAtLeast("close_area", c.close_area, 0.0),
+           requireAtLeast("stop_min_area", c.stop_min_area, 0.0),
+           requireAtLeast("stop_release_delay", c.stop_release_delay, 0.0),
+           requireAtLeast("approach_speed", c.approach_speed, 0.0),
+           requireAtLeast("turn_gain", c.turn_gain, 0.0),
+           requireName("target_colour", c.target_colour),
+           prefixed("target.", validate(c.target)),
+           prefixed("camera.", validate(c.camera)),
+           requirePositive("stop_distance", c.stop_distance),
+           requirePositive("k_range", c.k_range),
+           requirePositive("max_speed", c.max_speed),
+           requirePositive("speed_taper_bearing", c.speed_taper_bearing),
+           requireAtLeast("k_bearing", c.k_bearing, 0.0),
+           requirePositive("max_turn_rate", c.max_turn_rate),
+           requirePositive("distance_tolerance", c.distance_tolerance),
+           requirePositive("bearing_tolerance", c.bearing_tolerance),
+           requireAtLeast("lost_hold", c.lost_hold, 0.0),
+       }) {
+    if (!error.empty()) return error;
+  }
+  return "";
+}
+
+std::string checkColoursDetected(const BeaconControllerConfig& controller,
+                                 const ColourBlobConfig& detector) {
+  std::vector<std::pair<const char*, std::string>> used;
+  if (controller.mode == BeaconMode::kFollowGreenStopRed) {
+    used = {{"follow_colour", controller.follow_colour}, {"stop_colour", controller.stop_colour}};
+  } else {
+    used = {{"target_colour", controller.target_colour}};
+  }
+  for (const auto& [field, name] : used) {
+    const bool detected = std::any_of(detector.colours.begin(), detector.colours.end(),
+                                      [&](const ColourSpec& spec) { return spec.name == name; });
+    if (!detected) {
+      return std::string(field) + " '" + name + "' is not one of the detector's colours";
+    }
+  }
+  return "";
+}
+
+BeaconController::BeaconController(const BeaconControllerConfig& config) : config_(config) {
+  const std::string error = validate(config);
+  if (!error.empty()) throw std::invalid_argument("BeaconController: " + error);
+}
+
+void BeaconController::reset() { *this = BeaconController(config_); }
+
+Twist2D BeaconController::update(const BlobResult& blobs, double stamp) {
+  if (!std::isfinite(stamp) || !blobs.ok()) return Twist2D();
+  if (has_stamp_ && stamp < last_stamp_) reset();
+  has_stamp_ = true;
+  last_stamp_ = stamp;
+
+  const Twist2D command = config_.mode == BeaconMode::kFollowGreenStopRed
+                              ? followGreenStopRed(blobs, stamp)
+                              : approach(blobs, stamp);
+  if (!std::isfinite(command.linear) || !std::isfinite(command.angular)) return Twist2D();
+  return command;
+}
+
+Twist2D BeaconController::followGreenStopRed(const BlobResult& blobs, double stamp) {
+  if (seen(blobs, config_.stop_colour, config_.stop_min_area) != nullptr) {
+    stop_seen_ = true;
+    stop_last_seen_ = stamp;
+  }
+  if (stop_seen_ && stamp - stop_last_seen_ <= config_.stop_release_delay) {
+    state_ = BeaconState::kStoppedByRed;
+    return Twist2D();
+  }
+
+  const ColourBlob* target = seen(blobs, config_.follow_colour, 0.0);
+  if (target == nullptr || blobs.image_width <= 0) return search();
+  const double half_width = 0.5 * blobs.image_width;
+  const double error = std::clamp((target->centroid.x - half_width) / half_width, -1.0, 1.0);
+  if (error != 0.0) search_direction_ = error > 0.0 ? -1.0 : 1.0;
+  if (target->area >= config_.close_area) {
+    state_ = BeaconState::kHolding;
+    return Twist2D();
+  }
+  state_ = BeaconState::kApproaching;
+  return Twist2D{config_.approach_speed, -config_.turn_gain * error};
+}
+
+Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
+  const ColourBlob* target = seen(blobs, config_.target_colour, 0.0);
+  if (target == nullptr) {
+    last_range_.reset();
+    last_bearing_.reset();
+    if (target_seen_ && stamp - target_last_seen_ <= config_.lost_hold) {
+      state_ = BeaconState::kLost;
+      return Twist2D();
+    }
+    return search();
+  }
+  target_seen_ = true;
+  target_last_seen_ = stamp;
+
+  const CameraGeometry& camera = config_.camera;
+  const cv::Rect& box = target->bounding_box;
+  const bool spans_frame = box.x <= 0 && box.x + box.width >= blobs.image_width;
+  const double column = config_.target.shape == BeaconShape::kBox
+                            ? box.x + 0.5 * (box.width - 1)  // middle of the silhouette
+                            : target->centroid.x;
+  const double bearing = spans_frame ? 0.0 : std::atan((column - camera.cx) / camera.fx);
+  if (bearing != 0.0) search_direction_ = bearing > 0.0 ? -1.0 : 1.0;
+  const std::optional<double> range =
+      estimateRange(*target, blobs.image_width, blobs.image_height, camera, config_.target).best();
+  last_range_ = range;
+  last_bearing_ = bearing;
+
+  if (range && std::abs(*range - config_.stop_distance) < config_.distance_tolerance &&
+      std::abs(bearing) < config_.bearing_tolerance) {
+    state_ = BeaconState::kArrived;
+    return Twist2D();
+  }
+  state_ = BeaconState::kApproaching;
+  Twist2D command;
+  if (range) {
+    const double min_speed = config_.allow_reverse ? -config_.max_speed : 0.0;
+    const double taper = std::max(0.0, 1.0 - std::abs(bearing) / config_.speed_taper_bearing);
+    command.linear = taper * std::clamp(config_.k_range * (*range - config_.stop_distance),
+                                        min_speed, config_.max_speed);
+  }
+  command.angular =
+      std::clamp(-config_.k_bearing * bearing, -config_.max_turn_rate, config_.max_turn_rate);
+  return command;
+}
+
+Twist2D BeaconController::search() {
+  state_ = BeaconState::kSearching;
+  return Twist2D{0.0, search_direction_ * config_.search_rate};
+}
+
+}  // namespace follow_bot

@@ -1,0 +1,367 @@
+#include "follow_bot/colour_blobs.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <stdexcept>
+
+namespace follow_bot {
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 480;
+
+const cv::Scalar kFloorGrey(120, 120, 120);
+const cv::Scalar kPureRed(0, 0, 255);
+const cv::Scalar kPureGreen(0, 255, 0);
+const cv::Scalar kPureBlue(255, 0, 0);
+
+cv::Mat greyFrame() { return cv::Mat(kHeight, kWidth, CV_8UC3, kFloorGrey); }
+
+// The BGR colour with this OpenCV HSV (H 0..179).
+cv::Scalar bgrFromHsv(int h, int s, int v) {
+  cv::Mat pixel(1, 1, CV_8UC3, cv::Scalar(h, s, v));
+  cv::cvtColor(pixel, pixel, cv::COLOR_HSV2BGR);
+  const cv::Vec3b bgr = pixel.at<cv::Vec3b>(0, 0);
+  return cv::Scalar(bgr[0], bgr[1], bgr[2]);
+}
+
+// A disk shaded like a lit ball, full colour toward the top left and 60 % of it at the far
+// edge (shaded = false: flat): the pixels whose centres are within `radius` of a sub-pixel
+// centre.
+void drawDisk(cv::Mat& frame, cv::Point2d centre, double radius, const cv::Scalar& colour,
+              bool shaded = false) {
+  for (int v = 0; v < frame.rows; ++v) {
+    for (int u = 0; u < frame.cols; ++u) {
+      const double dx = (u - centre.x) / radius;
+      const double dy = (v - centre.y) / radius;
+      if (dx * dx + dy * dy > 1.0) continue;
+      const double light = std::clamp(0.5 - 0.5 * (dx + dy) / std::sqrt(2.0), 0.0, 1.0);
+      const double shade = shaded ? 0.6 + 0.4 * light : 1.0;
+      cv::Vec3b& pixel = frame.at<cv::Vec3b>(v, u);
+      for (int c = 0; c < 3; ++c) pixel[c] = cv::saturate_cast<uchar>(colour[c] * shade);
+    }
+  }
+}
+
+// A copy, so that callers may pass a temporary result.
+ColourBlob blobOf(const BlobResult& result, const std::string& name) {
+  const ColourBlob* blob = result.find(name);
+  if (blob == nullptr) throw std::runtime_error("no colour " + name);
+  return *blob;
+}
+
+TEST(ColourNames, ParseGivesTheIssueDefaults) {
+  const std::optional<ColourSpec> red = parseColourName("red");
+  const std::optional<ColourSpec> green = parseColourName("green");
+  const std::optional<ColourSpec> blue = parseColourName("blue");
+  ASSERT_TRUE(red && green && blue);
+  EXPECT_EQ(red->name, "red");
+  EXPECT_EQ(red->hue_centre, 0);
+  EXPECT_EQ(green->hue_centre, 60);
+  EXPECT_EQ(blue->hue_centre, 120);
+  EXPECT_EQ(green->sensitivity, 15);
+  EXPECT_FALSE(parseColourName("yellow"));
+  EXPECT_FALSE(parseColourName("Red"));
+  EXPECT_FALSE(parseColourName(""));
+}
+
+TEST(ColourNames, SpecsFromNamesReportsTheUnknownName) {
+  std::vector<ColourSpec> specs;
+  EXPECT_EQ(colourSpecsFromNames({"green", "red"}, specs), "");
+  ASSERT_EQ(specs.size(), 2u);
+  EXPECT_EQ(specs[0].name, "green");
+  EXPECT_EQ(specs[1].hue_centre, 0);
+  EXPECT_EQ(colourSpecsFromNames({"blue", "purple"}, specs),
+            "unknown colour name 'purple' (known: red, green, blue)");
+  EXPECT_EQ(specs.size(), 2u) << "left unchanged on error";
+}
+
+TEST(ColourBlobConfig, DefaultIsValidAndHasThreeColours) {
+  const ColourBlobConfig config;
+  EXPECT_EQ(validate(config), "");
+  ASSERT_EQ(config.colours.size(), 3u);
+  EXPECT_EQ(config.colours[0].name, "red");
+  EXPECT_EQ(config.colours[1].name, "green");
+  EXPECT_EQ(config.colours[2].name, "blue");
+}
+
+TEST(ColourBlobConfig, ValidateNamesTheBadField) {
+  ColourBlobConfig config;
+  config.colours[1].sensitivity = 95;
+  EXPECT_EQ(validate(config), "colours[1] (green): sensitivity must be in [0, 90], got 95");
+  config = ColourBlobConfig();
+  config.colours[0].sensitivity = -1;
+  EXPECT_EQ(validate(config), "colours[0] (red): sensitivity must be in [0, 90], got -1");
+  config = ColourBlobConfig();
+  config.colours[2].hue_centre = 180;
+  EXPECT_EQ(validate(config), "colours[2] (blue): hue_centre must be in [0, 179], got 180");
+  config = ColourBlobConfig();
+  config.colours[0].s_min = 256;
+  EXPECT_EQ(validate(config), "colours[0] (red): s_min must be in [0, 255], got 256");
+  config = ColourBlobConfig();
+  config.colours[0].v_min = -5;
+  EXPECT_EQ(validate(config), "colours[0] (red): v_min must be in [0, 255], got -5");
+  config = ColourBlobConfig();
+  config.colours[2].name = "green";
+  EXPECT_EQ(validate(config), "colours[2] (green): name is a duplicate");
+  config = ColourBlobConfig();
+  config.colours[0].name = "";
+  EXPECT_EQ(validate(config), "colours[0] (): name must not be empty");
+  config = ColourBlobConfig();
+  config.colours.clear();
+  EXPECT_EQ(validate(config), "colours must name at least one colour");
+  config = ColourBlobConfig();
+  config.min_area = -1.0;
+  EXPECT_EQ(validate(config), "min_area must be >= 0, got -1");
+  config = ColourBlobConfig();
+  config.open_kernel = 4;
+  EXPECT_EQ(validate(config), "open_kernel must be 0 (off) or an odd size, got 4");
+  config = ColourBlobConfig();
+  config.close_kernel = -3;
+  EXPECT_EQ(validate(config), "close_kernel must be 0 (off) or an odd size, got -3");
+  config.close_kernel = 1;
+  EXPECT_EQ(validate(config), "");
+}
+
+TEST(ColourBlobDetector, ConstructorRejectsBadConfig) {
+  ColourBlobConfig config;
+  config.min_area = -2.0;
+  EXPECT_THROW(ColourBlobDetector{config}, std::invalid_argument);
+}
+
+TEST(ColourBlobDetector, LabelsEachColourAndLocatesItsCentroid) {
+  struct Case {
+    const char* name;
+    cv::Scalar colour;
+    bool shaded;
+  };
+  const Case cases[] = {
+      {"red", kPureRed, false},
+      {"green", kPureGreen, false},
+      {"blue", kPureBlue, false},
+      {"red", cv::Scalar(0, 0, 230), true},  // the rgb world's balls, lit
+      {"green", cv::Scalar(0, 200, 0), true},
+      {"blue", cv::Scalar(230, 0, 0), true},
+      {"green", cv::Scalar(23, 69, 23), false},  // a shaded face of the dark-green dumpster
+  };
+  const ColourBlobDetector detector;
+  const cv::Point2d centres[] = {{150.3, 130.7}, {330.0, 250.25}, {500.6, 360.1}};
+  for (const Case& c : cases) {
+    for (const cv::Point2d& centre : centres) {
+      cv::Mat frame = greyFrame();
+      drawDisk(frame, centre, 40.0, c.colour, c.shaded);
+      const BlobResult result = detector.detect(frame);
+      ASSERT_TRUE(result.ok()) << result.error;
+      EXPECT_EQ(result.image_width, kWidth);
+      EXPECT_EQ(result.image_height, kHeight);
+      for (const ColourBlob& blob : result.colours) {
+        const bool expected = blob.name == c.name;
+        EXPECT_EQ(blob.found, expected) << c.name << " disk seen as " << blob.name;
+        if (!expected || !blob.found) continue;
+        EXPECT_EQ(blob.blob_count, 1);
+        EXPECT_NEAR(blob.centroid.x, centre.x, 0.5) << c.name;
+        EXPECT_NEAR(blob.centroid.y, centre.y, 0.5) << c.name;
+        EXPECT_NEAR(blob.circle_centre.x, centre.x, 1.0);
+        EXPECT_NEAR(blob.circle_centre.y, centre.y, 1.0);
+        EXPECT_NEAR(blob.circle_radius, 40.0, 1.0);
+        EXPECT_NEAR(blob.area, CV_PI * 40.0 * 40.0, 0.03 * CV_PI * 40.0 * 40.0);
+        EXPECT_NEAR(blob.bounding_box.x, centre.x - 40.0, 1.0);
+        EXPECT_NEAR(blob.bounding_box.br().x - 1, centre.x + 40.0, 1.0);
+        EXPECT_NEAR(blob.bounding_box.y, centre.y - 40.0, 1.0);
+        EXPECT_FALSE(blob.contour.empty());
+      }
+    }
+  }
+}
+
+TEST(ColourBlobDetector, SeesTwoColoursAtOnce) {
+  cv::Mat frame = greyFrame();
+  drawDisk(frame, {200.0, 240.0}, 30.0, kPureGreen);
+  drawDisk(frame, {450.0, 200.0}, 25.0, kPureRed);
+  const BlobResult result = ColourBlobDetector().detect(frame);
+  ASSERT_TRUE(blobOf(result, "green").found);
+  ASSERT_TRUE(blobOf(result, "red").found);
+  EXPECT_FALSE(blobOf(result, "blue").found);
+  EXPECT_NEAR(blobOf(result, "green").centroid.x, 200.0, 0.5);
+  EXPECT_NEAR(blobOf(result, "red").centroid.x, 450.0, 0.5);
+  EXPECT_EQ(result.find("purple"), nullptr);
+}
+
+TEST(ColourBlobDetector, RedIsFoundOnBothSidesOfTheHueWrap) {
+  const ColourBlobDetector detector;
+  for (int hue : {0, 3, 10, 15, 165, 170, 176, 179}) {
+    cv::Mat frame = greyFrame();
+    drawDisk(frame, {320.0, 240.0}, 30.0, bgrFromHsv(hue, 230, 220));
+    const BlobResult result = detector.detect(frame);
+    EXPECT_TRUE(blobOf(result, "red").found) << "hue " << hue;
+    EXPECT_FALSE(blobOf(result, "green").found) << "hue " << hue;
+    EXPECT_FALSE(blobOf(result, "blue").found) << "hue " << hue;
+  }
+  for (int hue : {20, 30, 100, 140, 160}) {  // orange-yellow, cyan-ish, purple, magenta
+    cv::Mat frame = greyFrame();
+    drawDisk(frame, {320.0, 240.0}, 30.0, bgrFromHsv(hue, 230, 220));
+    EXPECT_FALSE(blobOf(detector.detect(frame), "red").found) << "hue " << hue;
+  }
+}
+
+TEST(ColourBlobDetector, HueWindowWrapsAtTheTopForCustomColours) {
+  ColourBlobConfig config;
+  config.colours = {ColourSpec{"magenta", 170, 15, 100, 40}};  // 155..179 and 0..5
+  const ColourBlobDetector detector(config);
+  for (int hue : {155, 179, 0, 5}) {
+    cv::Mat frame = greyFrame();
+    drawDisk(frame, {320.0, 240.0}, 30.0, bgrFromHsv(hue, 230, 220));
+    EXPECT_TRUE(blobOf(detector.detect(frame), "magenta").found) << "hue " << hue;
+  }
+  for (int hue : {150, 6}) {
+    cv::Mat frame = greyFrame();
+    drawDisk(frame, {320.0, 240.0}, 30.0, bgrFromHsv(hue, 230, 220));
+    EXPECT_FALSE(blobOf(detector.detect(frame), "magenta").found) << "hue " << hue;
+  }
+}
+
+TEST(ColourBlobDetector, SaturationAndValueFloorsRejectGreyAndDark) {
+  const ColourBlobDetector detector;
+  cv::Mat frame = greyFrame();
+  drawDisk(frame, {200.0, 240.0}, 40.0, bgrFromHsv(60, 80, 200));  // washed-out green
+  drawDisk(frame, {450.0, 240.0}, 40.0, bgrFromHsv(60, 255, 30));  // nearly black green
+  EXPECT_FALSE(blobOf(detector.detect(frame), "green").found);
+}
+
+TEST(ColourBlobDetector, MinAreaIsRespected) {
+  ColourBlobConfig config;
+  config.min_area = 300.0;
+  const ColourBlobDetector detector(config);
+  cv::Mat frame = greyFrame();
+  drawDisk(frame, {320.0, 240.0}, 9.0, kPureGreen);  // ~250 px^2
+  EXPECT_FALSE(blobOf(detector.detect(frame), "green").found);
+  EXPECT_EQ(blobOf(detector.detect(frame), "green").blob_count, 0);
+  frame = greyFrame();
+  drawDisk(frame, {320.0, 240.0}, 11.0, kPureGreen);  // ~380 px^2
+  const ColourBlob green = blobOf(detector.detect(frame), "green");
+  EXPECT_TRUE(green.found);
+  EXPECT_GE(green.area, 300.0);
+}
+
+TEST(ColourBlobDetector, ChoosesTheLargestBlob) {
+  cv::Mat frame = greyFrame();
+  drawDisk(frame, {120.0, 240.0}, 20.0, kPureGreen);
+  drawDisk(frame, {420.0, 200.0}, 45.0, kPureGreen);
+  drawDisk(frame, {580.0, 400.0}, 30.0, kPureGreen);
+  const BlobResult result = ColourBlobDetector().detect(frame);
+  const ColourBlob green = blobOf(result, "green");
+  ASSERT_TRUE(green.found);
+  EXPECT_EQ(green.blob_count, 3);
+  EXPECT_NEAR(green.centroid.x, 420.0, 0.5);
+  EXPECT_NEAR(green.centroid.y, 200.0, 0.5);
+  EXPECT_NEAR(green.circle_radius, 45.0, 1.0);
+}
+
+TEST(ColourBlobDetector, CleanUpRemovesSpecklesAndFillsPinholes) {
+  cv::Mat frame = greyFrame();
+  drawDisk(frame, {320.0, 240.0}, 50.0, kPureBlue);
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> column(0, kWidth - 1);
+  std::uniform_int_distribution<int> row(0, kHeight - 1);
+  for (int i = 0; i < 3000; ++i) {  // blue salt everywhere, grey pepper inside the disk
+    frame.at<cv::Vec3b>(row(random), column(random)) = cv::Vec3b(255, 0, 0);
+  }
+  for (int i = 0; i < 200; ++i) {
+    const double angle = i * 0.7;
+    const double radius = 45.0 * (i % 10) / 10.0;
+    frame.at<cv::Vec3b>(cvRound(240.0 + radius * std::sin(angle)),
+                        cvRound(320.0 + radius * std::cos(angle))) = cv::Vec3b(120, 120, 120);
+  }
+
+  const ColourBlob cleaned = blobOf(ColourBlobDetector().detect(frame), "blue");
+  ASSERT_TRUE(cleaned.found);
+  EXPECT_EQ(cleaned.blob_count, 1);
+  EXPECT_NEAR(cleaned.centroid.x, 320.0, 0.5);
+  EXPECT_NEAR(cleaned.centroid.y, 240.0, 0.5);
+  EXPECT_NEAR(cleaned.circle_radius, 50.0, 1.0);
+  const cv::Mat mask = ColourBlobDetector().mask(frame, "blue");
+  ASSERT_EQ(mask.type(), CV_8UC1);
+  EXPECT_EQ(cv::countNonZero(mask(cv::Rect(300, 220, 41, 41))), 41 * 41) << "pinholes filled";
+  EXPECT_LT(cv::countNonZero(mask), CV_PI * 52.0 * 52.0) << "specks removed";
+
+  ColourBlobConfig raw;
+  raw.open_kernel = 0;
+  raw.close_kernel = 0;
+  raw.min_area = 0.0;
+  EXPECT_GT(blobOf(ColourBlobDetector(raw).detect(frame), "blue").blob_count, 1000);
+}
+
+TEST(ColourBlobDetector, WholeFrameOfOneColourIsOneBlob) {
+  const cv::Mat frame(kHeight, kWidth, CV_8UC3, kPureGreen);
+  const BlobResult result = ColourBlobDetector().detect(frame);
+  const ColourBlob green = blobOf(result, "green");
+  ASSERT_TRUE(green.found);
+  EXPECT_EQ(green.blob_count, 1);
+  EXPECT_EQ(green.bounding_box, cv::Rect(0, 0, kWidth, kHeight));
+  EXPECT_DOUBLE_EQ(green.area, (kWidth - 1.0) * (kHeight - 1.0));
+  EXPECT_NEAR(green.centroid.x, (kWidth - 1) / 2.0, 1e-9);
+  EXPECT_NEAR(green.centroid.y, (kHeight - 1) / 2.0, 1e-9);
+  EXPECT_FALSE(blobOf(result, "red").found);
+  EXPECT_FALSE(blobOf(result, "blue").found);
+}
+
+TEST(ColourBlobDetector, NoBeaconInANoisyGreyScene) {
+  cv::Mat frame = greyFrame();
+  frame.rowRange(0, kHeight / 2).setTo(cv::Scalar(200, 200, 200));  // sky above the horizon
+  cv::Mat noise(frame.size(), CV_16SC3);
+  cv::randn(noise, 0.0, 8.0);
+  frame.convertTo(frame, CV_16SC3);
+  frame += noise;
+  frame.convertTo(frame, CV_8UC3);
+  const BlobResult result = ColourBlobDetector().detect(frame);
+  ASSERT_TRUE(result.ok());
+  ASSERT_EQ(result.colours.size(), 3u);
+  for (const ColourBlob& blob : result.colours) {
+    EXPECT_FALSE(blob.found) << blob.name;
+    EXPECT_EQ(blob.area, 0.0);
+    EXPECT_TRUE(blob.contour.empty());
+  }
+}
+
+TEST(ColourBlobDetector, RejectsEmptyAndWrongTypeFramesWithoutThrowing) {
+  const ColourBlobDetector detector;
+  const cv::Mat frames[] = {cv::Mat(), cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(0)),
+                            cv::Mat(kHeight, kWidth, CV_8UC4, kPureGreen),
+                            cv::Mat(kHeight, kWidth, CV_32FC3, cv::Scalar(0, 1, 0))};
+  for (const cv::Mat& frame : frames) {
+    BlobResult result;
+    EXPECT_NO_THROW(result = detector.detect(frame));
+    EXPECT_FALSE(result.ok());
+    EXPECT_FALSE(result.error.empty());
+    ASSERT_EQ(result.colours.size(), 3u);
+    for (const ColourBlob& blob : result.colours) EXPECT_FALSE(blob.found);
+    EXPECT_TRUE(detector.mask(frame, "green").empty());
+  }
+  EXPECT_EQ(detector.detect(cv::Mat()).error, "empty frame");
+  EXPECT_EQ(detector.detect(frames[1]).error, "expected a CV_8UC3 (BGR) frame, got type 0");
+}
+
+TEST(ColourBlobDetector, RectangleBoundingBoxIsExact) {
+  cv::Mat frame = greyFrame();
+  cv::rectangle(frame, cv::Rect(100, 150, 201, 121), kPureGreen, cv::FILLED);
+  const ColourBlob green = blobOf(ColourBlobDetector().detect(frame), "green");
+  ASSERT_TRUE(green.found);
+  EXPECT_EQ(green.bounding_box, cv::Rect(100, 150, 201, 121));
+  // The 3x3 elliptical (cross) opening trims each corner pixel: half a px^2 of contour area.
+  EXPECT_DOUBLE_EQ(green.area, 200.0 * 120.0 - 4 * 0.5);
+  EXPECT_NEAR(green.centroid.x, 200.0, 1e-9);
+  EXPECT_NEAR(green.centroid.y, 210.0, 1e-9);
+}
+
+TEST(ColourBlobDetector, MaskOfUnknownColourIsEmpty) {
+  const cv::Mat frame = greyFrame();
+  EXPECT_TRUE(ColourBlobDetector().mask(frame, "purple").empty());
+  EXPECT_EQ(cv::countNonZero(ColourBlobDetector().mask(frame, "red")), 0);
+}
+
+}  // namespace
+}  // namespace follow_bot
