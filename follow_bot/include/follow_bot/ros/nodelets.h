@@ -8,5 +8,6 @@
 namespace follow_bot {
 
 std::unique_ptr<nodelet::Nodelet> makeFollowerNodelet();
+std::unique_ptr<nodelet::Nodelet> makeBeaconChaserNodelet();
 
 }  // namespace follow_bot

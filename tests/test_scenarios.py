@@ -1,8 +1,8 @@
-"""Issue 4's scenarios: the follower in the closed loop, judged by each scenario's criteria.
+"""The behaviours in the closed loop, each judged by its scenario's own criteria.
 
-Every scenario in worlds/scenarios/follower_*.yaml is played by run_scenario (its own roscore,
-the follower launch file, the simulator in lockstep); the test reads result.json and fails
-with every unmet criterion listed.
+Every follower_*, dumpster_* and beacons_* scenario in worlds/scenarios is played by
+run_scenario (its own roscore, the behaviour's launch file, the simulator in lockstep); the test
+reads result.json and fails with every unmet criterion listed.
 """
 
 import json
@@ -17,7 +17,7 @@ SCENARIOS = sorted(
 
 
 @pytest.mark.parametrize("scenario", SCENARIOS, ids=[p.stem for p in SCENARIOS])
-def test_follower_scenario(scenario, tmp_path):
+def test_behaviour_scenario(scenario, tmp_path):
     subprocess.run(
         ["rosrun", "harness", "run_scenario", str(scenario), "--out", str(tmp_path)],
         timeout=600,
