@@ -22,10 +22,10 @@
 #include "follow_bot/BeaconDetections.h"
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
+#include "follow_bot/ros/camera_input.h"
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/ros/params.h"
-#include "image_converter/ros/frame_msg.h"
 
 namespace follow_bot {
 
@@ -117,39 +117,24 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
   // Ranges need the intrinsics; the controller is rebuilt when they change.
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
     std::lock_guard<std::mutex> lock(mutex_);
-    CameraGeometry camera = controller_config_.camera;
-    camera.fx = info->K[0];
-    camera.fy = info->K[4];
-    camera.cx = info->K[2];
-    camera.cy = info->K[5];
-    const std::string error = validate(camera);
+    bool changed = false;
+    const std::string error = updateIntrinsics(*info, controller_config_.camera, changed);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
       return;
     }
-    const CameraGeometry& old = controller_config_.camera;
-    if (has_intrinsics_ && camera.fx == old.fx && camera.fy == old.fy && camera.cx == old.cx &&
-        camera.cy == old.cy) {
-      return;
+    if (changed || !has_intrinsics_) {
+      controller_ = std::make_unique<BeaconController>(controller_config_);
+      has_intrinsics_ = true;
     }
-    controller_config_.camera = camera;
-    controller_ = std::make_unique<BeaconController>(controller_config_);
-    has_intrinsics_ = true;
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
-    const image_converter::FrameCheck check =
-        image_converter::checkFrame(image_converter::rawFrameOf(*msg));
-    if (!check.ok()) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", check.error.c_str());
-      return;
-    }
-    cv_bridge::CvImageConstPtr frame;
-    try {
-      frame = cv_bridge::toCvShare(msg, "bgr8");
-    } catch (const cv_bridge::Exception& error) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.what());
+    std::string error;
+    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
+    if (!frame) {
+      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
       return;
     }
     output_->frameArrived();

@@ -22,10 +22,10 @@
 #include "follow_bot/line_controller.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot/line_path.h"
+#include "follow_bot/ros/camera_input.h"
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/ros/params.h"
-#include "image_converter/ros/frame_msg.h"
 
 namespace follow_bot {
 
@@ -157,21 +157,16 @@ class FollowerNodelet : public nodelet::Nodelet {
 
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    CameraGeometry camera = camera_;
-    camera.fx = info->K[0];
-    camera.fy = info->K[4];
-    camera.cx = info->K[2];
-    camera.cy = info->K[5];
-    const std::string error = validate(camera);
+    bool changed = false;
+    const std::string error = updateIntrinsics(*info, camera_, changed);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
       return;
     }
-    const bool changed = !has_intrinsics_ || camera.fx != camera_.fx || camera.fy != camera_.fy ||
-                         camera.cx != camera_.cx || camera.cy != camera_.cy;
-    camera_ = camera;
-    has_intrinsics_ = true;
-    if (changed) apply(settings_);
+    if (changed || !has_intrinsics_) {
+      has_intrinsics_ = true;
+      apply(settings_);
+    }
   }
 
   // The base's measured motion: better than the commands for path mode's memory whenever the
@@ -204,17 +199,10 @@ class FollowerNodelet : public nodelet::Nodelet {
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    const image_converter::FrameCheck check =
-        image_converter::checkFrame(image_converter::rawFrameOf(*msg));
-    if (!check.ok()) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", check.error.c_str());
-      return;
-    }
-    cv_bridge::CvImageConstPtr frame;
-    try {
-      frame = cv_bridge::toCvShare(msg, "bgr8");  // no copy when the camera sends bgr8
-    } catch (const cv_bridge::Exception& error) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.what());
+    std::string error;
+    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
+    if (!frame) {
+      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
       return;
     }
     // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
