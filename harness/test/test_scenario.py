@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from harness.geometry import polyline_length
-from harness.scenario import Criterion, ScenarioError, check, metrics, parse_scenario
+from harness.scenario import (
+    Criterion,
+    ScenarioError,
+    check,
+    metrics,
+    parse_scenario,
+    stop_on_sight,
+)
 from harness.simulation import Perturbations, Simulation, with_line_gaps
 from harness.world import load_world, resolve_world_path
 
@@ -121,3 +128,18 @@ def test_line_gaps_leave_the_scored_centreline_whole():
     assert len(lengths) == 2 and not any(line.closed for line in painted.ground.lines)
     assert sum(lengths) == pytest.approx(total - 0.8, abs=0.03)
     assert world.ground.lines[0].closed  # the original, used for scoring, is untouched
+
+
+def test_stop_on_sight_times_the_stop_from_the_first_glimpse():
+    world = load_world(resolve_world_path("red_in_view"))
+    red = next(o for o in world.objects if o.name == "red")
+    t = np.arange(0.0, 3.0, 0.1)
+    yaw = np.minimum(-1.0472 + 0.5 * t, -0.6)  # turning left toward the red ball, then still
+    run = {"t": t, "x": np.zeros_like(t), "y": np.zeros_like(t), "yaw": yaw,
+           "v": np.zeros_like(t), "w": np.where(t < 1.0, 0.5, 0.0)}  # fmt: skip
+    watch = stop_on_sight(world, red, run)
+    assert 0.0 < watch["first_in_view"] < 1.0
+    assert watch["stop_delay"] == pytest.approx(1.0 - watch["first_in_view"])
+    assert watch["moving_in_view_after_stop"] == 0
+    never = stop_on_sight(world, red, dict(run, yaw=np.full_like(t, 3.0)))
+    assert never["first_in_view"] is None and never["steps_in_view"] == 0

@@ -93,6 +93,7 @@ class Scenario:
     reply_timeout: float  # wall seconds to wait for the behaviour's command in lockstep
     perturbations: Perturbations
     target: str | None  # object name for stop distance and bearing
+    watch: str | None  # object whose coming into view must stop the robot (e.g. the red ball)
     goal: str | None  # marker name to park in front of
     standoff: float
     criteria: tuple[Criterion, ...]
@@ -166,7 +167,8 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
     base = Path(base_dir)
     allowed = {
         "name", "world", "start", "behaviour", "driver", "rate_hz", "duration", "stop_when",
-        "lockstep", "reply_timeout", "perturbations", "target", "goal", "standoff", "criteria",
+        "lockstep", "reply_timeout", "perturbations", "target", "watch", "goal", "standoff",
+        "criteria",
     }  # fmt: skip
     try:
         f = Fields(data, "", allowed)
@@ -191,6 +193,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             reply_timeout=f.get("reply_timeout", number(gt=0.0), 2.0),
             perturbations=f.section("perturbations", _parse_perturbations),
             target=f.get("target", string, None),
+            watch=f.get("watch", string, None),
             goal=f.get("goal", string, None),
             standoff=f.get("standoff", number(gt=0.0), 0.5),
             criteria=f.get("criteria", _parse_criteria, ()),
@@ -254,6 +257,8 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         err = scoring.parking_error(path[-1], (x, y, yaw), scenario.standoff)
         err["heading_error_deg"] = math.degrees(err["heading_error"])
         out["parking"] = err
+    if scenario.watch and len(t):
+        out["watch"] = stop_on_sight(world, _object(world, scenario.watch, "watch"), run)
     dropouts = []
     for start, end in scenario.perturbations.dropouts:
         stop = scoring.time_to_stop(t, run["v"], run["w"], start)
@@ -268,6 +273,41 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         delays = [d["stop_delay"] for d in dropouts]
         out["dropout_stop_delay_max"] = None if None in delays else max(delays)
     return out
+
+
+def stop_on_sight(world: World, obj, run: dict[str, np.ndarray]) -> dict:
+    """When part of `obj` first comes into the camera's view, how long until a zero command, and
+    how many later steps with it in view still had a non-zero command. Spheres count as in view
+    once their silhouette (centre +- projected radius) overlaps the image; others by centre."""
+    centre = np.asarray(getattr(obj, "position", None) or obj.pose)[:3]
+    radius = getattr(obj, "radius", 0.0)
+    cam = world.camera
+    in_view = np.zeros(len(run["t"]), dtype=bool)
+    for k, pose in enumerate(zip(run["x"], run["y"], run["yaw"], strict=True)):
+        uv, depth = cam.project(centre[None, :], pose)
+        if depth[0] <= 0:
+            continue
+        u, v = uv[0]
+        margin = cam.fx * radius / depth[0]
+        in_view[k] = -margin <= u < cam.width + margin and -margin <= v < cam.height + margin
+    seen = np.nonzero(in_view)[0]
+    if not len(seen):
+        return {
+            "first_in_view": None,
+            "stop_delay": None,
+            "steps_in_view": 0,
+            "moving_in_view_after_stop": 0,
+        }
+    t, v, w = run["t"], run["v"], run["w"]
+    stop = scoring.time_to_stop(t, v, w, float(t[seen[0]]))
+    after = in_view & (t > (stop["t_stop"] if stop["t_stop"] is not None else t[-1]))
+    moving = (np.abs(v) > 0) | (np.abs(w) > 0)
+    return {
+        "first_in_view": float(t[seen[0]]),
+        "stop_delay": stop["stop_delay"],
+        "steps_in_view": int(in_view.sum()),
+        "moving_in_view_after_stop": int(np.count_nonzero(after & moving)),
+    }
 
 
 def check(scenario: Scenario, values: dict) -> list[dict]:
