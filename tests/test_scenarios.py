@@ -11,8 +11,11 @@ from pathlib import Path
 
 import pytest
 
+SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 SCENARIOS = sorted(
-    (Path(__file__).resolve().parents[1] / "worlds" / "scenarios").glob("follower_*.yaml")
+    path
+    for pattern in ("follower_*.yaml", "dumpster_*.yaml", "beacons_*.yaml")
+    for path in SCENARIO_DIR.glob(pattern)
 )
 
 
