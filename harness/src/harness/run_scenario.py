@@ -22,7 +22,14 @@ from pathlib import Path
 import numpy as np
 
 from harness.plot import plot_run
-from harness.scenario import Scenario, ScenarioError, check, load_scenario, metrics
+from harness.scenario import (
+    Scenario,
+    ScenarioError,
+    check,
+    find_object,
+    load_scenario,
+    metrics,
+)
 from harness.world import WorldError, load_world
 
 MASTER_START_TIMEOUT = 20.0  # wall s
@@ -121,7 +128,7 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
     (out / "result.json").write_text(json.dumps(result, indent=2, default=float))
     goal = None
     if scenario.goal:
-        x, y, _, yaw = next(o for o in world.objects if o.name == scenario.goal).pose
+        x, y, _, yaw = find_object(world, scenario.goal, "goal").pose
         goal = (x, y, yaw)
     path = np.column_stack([run["x"], run["y"], run["yaw"]])
     plot_run(out / "run.png", world, path, goal=goal, metrics=headline(values), title=scenario.name)

@@ -27,7 +27,7 @@ from harness.validation import (
     string,
     vector,
 )
-from harness.world import World, WorldError, resolve_world_path
+from harness.world import Box, Sphere, World, WorldError, resolve_world_path
 
 STOP_CONDITIONS = ("duration", "lap_complete")
 
@@ -215,12 +215,22 @@ def load_scenario(path: Path | str) -> Scenario:
     return parse_scenario(data, p.parent, p.resolve())
 
 
-def _object(world: World, name: str, field: str):
+def find_object(world: World, name: str, field: str):
+    """The world's object called `name`; a ScenarioError naming `field` when there is none."""
     for obj in world.objects:
         if obj.name == name:
             return obj
     names = ", ".join(o.name for o in world.objects) or "none"
     raise ScenarioError(f"{field}: world '{world.name}' has no object {name!r} (objects: {names})")
+
+
+def object_centre(obj) -> np.ndarray:
+    """World [x, y, z] of an object's centre (a box's pose has no z: it stands on the floor)."""
+    if isinstance(obj, Sphere):
+        return np.asarray(obj.position, dtype=float)
+    if isinstance(obj, Box):
+        return np.array([obj.pose[0], obj.pose[1], obj.size[2] / 2.0])
+    return np.asarray(obj.pose[:3], dtype=float)  # markers: [x, y, z, yaw]
 
 
 def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dict:
@@ -246,19 +256,19 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         out["lap"] = scoring.lap_stats(t, path, centreline)
         out["lap"]["complete"] = out["lap"]["laps"] >= 1
     if scenario.target and len(t):
-        obj = _object(world, scenario.target, "target")
+        obj = find_object(world, scenario.target, "target")
         out["target"] = scoring.stop_distance(path, obj)
-        centre = np.asarray(getattr(obj, "position", None) or obj.pose)[:2]
+        centre = object_centre(obj)[:2]
         bearing = math.atan2(centre[1] - path[-1, 1], centre[0] - path[-1, 0]) - path[-1, 2]
         out["target"]["bearing_deg"] = abs(math.degrees(math.remainder(bearing, math.tau)))
     if scenario.goal and len(t):
-        marker = _object(world, scenario.goal, "goal")
+        marker = find_object(world, scenario.goal, "goal")
         x, y, _, yaw = marker.pose
         err = scoring.parking_error(path[-1], (x, y, yaw), scenario.standoff)
         err["heading_error_deg"] = math.degrees(err["heading_error"])
         out["parking"] = err
     if scenario.watch and len(t):
-        out["watch"] = stop_on_sight(world, _object(world, scenario.watch, "watch"), run)
+        out["watch"] = stop_on_sight(world, find_object(world, scenario.watch, "watch"), run)
     dropouts = []
     for start, end in scenario.perturbations.dropouts:
         stop = scoring.time_to_stop(t, run["v"], run["w"], start)
@@ -279,7 +289,7 @@ def stop_on_sight(world: World, obj, run: dict[str, np.ndarray]) -> dict:
     """When part of `obj` first comes into the camera's view, how long until a zero command, and
     how many later steps with it in view still had a non-zero command. Spheres count as in view
     once their silhouette (centre +- projected radius) overlaps the image; others by centre."""
-    centre = np.asarray(getattr(obj, "position", None) or obj.pose)[:3]
+    centre = object_centre(obj)
     radius = getattr(obj, "radius", 0.0)
     cam = world.camera
     in_view = np.zeros(len(run["t"]), dtype=bool)

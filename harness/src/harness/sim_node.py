@@ -208,8 +208,8 @@ class SimNode:
         if not self.record_path:
             return
         Path(self.record_path).parent.mkdir(parents=True, exist_ok=True)
-        np.savez(self.record_path, loop_wall=loop_wall, **self.sim.record.arrays())
         arrays = self.sim.record.arrays()
+        np.savez(self.record_path, loop_wall=loop_wall, **arrays)
         rospy.loginfo(
             "sim: %d steps, %.2f s sim time, %d missed replies, record %s",
             len(arrays["t"]),
