@@ -62,19 +62,26 @@ def _expected_tag_pose(camera, pose, tag):
     return r @ axes, r @ np.array([x, y, z]) + t
 
 
-# (x, y, bearing offset): 1, 2, 3 m straight in front, then oblique views (incidence 17-32 deg).
+# (x, y, bearing offset): 1, 2, 2.5, 3 m straight in front, near face-on, then oblique views
+# (incidence 17-32 deg).
 VIEWS = [
     (2.0, 0.0, 0.0),
     (1.0, 0.0, 0.0),
+    (0.5, 0.0, 0.0),
     (0.0, 0.0, 0.0),
+    (1.0, -0.2, 0.05),
     (1.0, 0.0, -0.35),
     (2.0, 0.0, 0.3),
+    (2.0, 0.3, 0.0),
     (1.0, 0.6, 0.1),
     (1.5, -0.8, -0.15),
     (0.5, 1.2, 0.2),
     (2.2, 0.5, -0.1),
     (0.3, -1.5, 0.1),
 ]
+
+# Corner accuracy of the detector on rendered edges, in pixels (measured 0.05-0.2 px).
+CORNER_PX = 0.1
 
 
 @pytest.mark.parametrize("view", VIEWS)
@@ -89,23 +96,25 @@ def test_rendered_tag_detected_with_true_pose(parking, view):
     (det,) = detect(gray, tag_size=tag.size, camera_k=k)
     assert det.tag_id == tag.tag_id
     truth = renderer.object_projections(pose)[0]["corners_px"]  # TL, TR, BR, BL
-    # The detector's own corner noise is ~0.2 px; convention errors would be >= 0.5 px.
+    # Convention errors (pixel centres, tag size, principal point) would be >= 0.5 px.
     np.testing.assert_allclose(det.corners, np.array(truth)[[3, 2, 1, 0]], atol=0.3)
     rot, centre = _expected_tag_pose(cam, pose, tag)
     rng = float(np.linalg.norm(centre))
-    err = det.translation - centre
-    assert np.hypot(err[0], err[1]) < 0.005
-    # Depth error allowed by 0.3 px of corner noise on a tag of fx * size / depth pixels.
-    assert abs(err[2]) < 0.002 + rng**2 * 0.3 / (cam.fx * tag.size)
-    if rng <= 1.05:
-        assert np.linalg.norm(err) < 0.01
+    assert 0.9 <= rng <= 3.1
+    assert np.linalg.norm(det.translation - centre) < 0.01
     rel = det.rotation.T @ rot
     angle = math.degrees(math.acos(min(1.0, (np.trace(rel) - 1.0) / 2.0)))
     roll = math.degrees(math.atan2(det.rotation[1, 0], det.rotation[0, 0]))
     assert roll == pytest.approx(math.degrees(math.atan2(rot[1, 0], rot[0, 0])), abs=1.0)
     incidence = math.degrees(math.acos(abs(rot[:, 2] @ centre) / rng))
-    if incidence >= 25.0:  # face-on views suffer the planar-pose tilt ambiguity
+    if rng <= 1.05 or incidence >= 15.0:
         assert angle < 1.0
+    else:
+        # Seen face-on from afar, a tilt t moves the corners by only fx (size/2)^2 t / range^2
+        # pixels (0.017 px per degree at 3 m), far below any detector's corner accuracy, so the
+        # tilt is unobservable there; allow what CORNER_PX of corner error can hide.
+        hidden = math.degrees(CORNER_PX * rng**2 / (cam.fx * (tag.size / 2) ** 2))
+        assert angle < 1.0 + hidden
 
 
 def test_rendered_tag_matches_independent_ray_cast(parking):

@@ -80,7 +80,7 @@ def test_shipped_objects(worlds):
     assert isinstance(box, Box) and sorted(box.size) == [1.0, 1.2, 1.8]
     (tag,) = worlds["parking"].objects
     assert isinstance(tag, AprilTagMarker)
-    assert (tag.family, tag.tag_id, tag.size, tag.post) == ("tag36h11", 0, 0.16, True)
+    assert (tag.family, tag.tag_id, tag.size, tag.post) == ("tag36h11", 0, 0.30, True)
     sx, sy, _ = worlds["parking"].robot.start
     normal = np.array([math.cos(tag.pose[3]), math.sin(tag.pose[3])])
     to_robot = np.array([sx - tag.pose[0], sy - tag.pose[1]])

@@ -387,7 +387,7 @@ class _MarkerItem:
         size = (u1 - u0 + 1, v1 - v0 + 1)
         # Supersample small boards so edges get true area coverage (what the detector's
         # sub-pixel edge refinement expects); big ones are sharp enough as they are.
-        ss = 4 if size[0] * size[1] <= 10_000 else 2 if size[0] * size[1] <= 40_000 else 1
+        ss = 4 if size[0] * size[1] <= 40_000 else 2 if size[0] * size[1] <= 160_000 else 1
         edge_px = np.max(np.hypot(*(uv - np.roll(uv, 1, axis=0)).T)) if len(clipped) == 4 else 1e9
         # Finest level whose texels cover at least one (super)sample: bilinear magnification
         # then puts every black/white edge's 50 % point exactly where the geometry says.
