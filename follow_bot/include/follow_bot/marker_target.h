@@ -1,0 +1,35 @@
+// A planar parking marker (an AprilTag or a textured sign) seen in one image, and the interface
+// both marker detectors implement so the parker servos on either without knowing which.
+#pragma once
+
+#include <array>
+#include <optional>
+
+#include <opencv2/core.hpp>
+
+#include "follow_bot/ground_projection.h"
+
+namespace follow_bot {
+
+// Marker frame: origin at the marker's centre, x to a viewer's right and y down as seen from
+// the front, z into the marker (the ViSP and apriltag convention). The pose is that frame
+// expressed in the camera optical frame (x right, y down, z forward), in metres.
+struct MarkerObservation {
+  int id = -1;                         // tag id; 0 for a sign
+  std::array<cv::Point2d, 4> corners;  // pixels (OpenCV centres): TL, TR, BR, BL seen from the front
+  cv::Matx33d rotation = cv::Matx33d::eye();
+  cv::Vec3d translation;             // marker centre
+  double reprojection_error_px = 0;  // RMS over the corners (tag) or the inliers (sign)
+  double quality = 0;                // decision margin (tag) or RANSAC inlier count (sign)
+};
+
+class MarkerDetector {
+ public:
+  virtual ~MarkerDetector() = default;
+  // The configured marker in a mono8 image, or nothing. Only the intrinsics of `camera` are
+  // used; images are rectified (CameraInfo with zero distortion).
+  virtual std::optional<MarkerObservation> detect(const cv::Mat& gray,
+                                                  const CameraGeometry& camera) = 0;
+};
+
+}  // namespace follow_bot
