@@ -15,8 +15,9 @@ namespace follow_bot {
 // the front, z into the marker (the ViSP and apriltag convention). The pose is that frame
 // expressed in the camera optical frame (x right, y down, z forward), in metres.
 struct MarkerObservation {
-  int id = -1;                         // tag id; 0 for a sign
-  std::array<cv::Point2d, 4> corners;  // pixels (OpenCV centres): TL, TR, BR, BL seen from the front
+  int id = -1;  // tag id; 0 for a sign
+  std::array<cv::Point2d, 4>
+      corners;  // pixels (OpenCV centres): TL, TR, BR, BL seen from the front
   cv::Matx33d rotation = cv::Matx33d::eye();
   cv::Vec3d translation;             // marker centre
   double reprojection_error_px = 0;  // RMS over the corners (tag) or the inliers (sign)
