@@ -27,8 +27,8 @@ struct SignDetectorConfig {
   int min_reference_features = 50;         // fewer makes the reference featureless: startup error
   int max_image_features = 0;              // strongest keypoints kept per camera image (0 = all)
   double max_reprojection_error_px = 2.0;  // RMS over the inliers of the final pose, else rejected
-  int refine_passes = 2;        // render-and-align (ECC) passes before the pose; 0 = keypoints only
-  int refine_iterations = 100;  // ECC iteration limit per pass
+  int refine_passes = 2;       // render-and-align (ECC) passes before the pose; 0 = keypoints only
+  int refine_iterations = 30;  // ECC iteration limit per pass
   double min_correlation = 0.8;      // ECC correlation needed to use the refined homography
   double max_refine_shift_px = 3.0;  // larger corner moves by ECC mean it diverged: keep RANSAC's
   // When the two planar-pose solutions' RMS errors differ by less than this (pixels), they cannot
@@ -52,12 +52,26 @@ class SignDetector : public MarkerDetector {
                                           const CameraGeometry& camera) override;
 
   // Forget the previous pose (e.g. after the sign was lost for a while).
-  void reset() { previous_rotation_.reset(); }
+  void reset() {
+    previous_rotation_.reset();
+    search_window_.reset();
+  }
 
   int referenceFeatures() const { return static_cast<int>(reference_points_.size()); }
   double heightMetres() const { return height_m_; }
 
  private:
+  struct Matches {
+    cv::Matx33d plane_to_image;       // RANSAC homography, sign plane (metres) to pixels
+    std::vector<cv::Point3f> object;  // inliers on the sign plane
+    std::vector<cv::Point2f> image;   // ... and in the image
+  };
+  // SIFT keypoints inside `window` (optionally found on a half-resolution copy), matched and
+  // RANSAC-filtered; nothing below min_inliers or for a mirrored fit.
+  std::optional<Matches> matchIn(const cv::Mat& gray, const cv::Rect& window,
+                                 bool half_resolution) const;
+  // The sign's corners TL, TR, BR, BL on its plane, metres.
+  std::vector<cv::Point2d> outlinePlane() const;
   // One render-and-align pass on a sign-plane (metres) to image homography, in place; false (and
   // the homography untouched) when ECC fails, correlates poorly or moves the corners too far.
   bool refineHomography(const cv::Mat& gray, cv::Matx33d& plane_to_image) const;
@@ -70,6 +84,8 @@ class SignDetector : public MarkerDetector {
   std::vector<cv::Point3f> reference_points_;  // keypoints on the sign plane, metres, z = 0
   cv::Mat reference_descriptors_;
   std::optional<cv::Matx33d> previous_rotation_;
+  std::optional<cv::Rect> search_window_;  // where the sign was last seen, grown
+  bool search_half_resolution_ = false;    // it was big there
 };
 
 }  // namespace follow_bot

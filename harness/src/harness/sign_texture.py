@@ -12,6 +12,7 @@ coordinates, so the same image comes out on every machine.
 from __future__ import annotations
 
 import argparse
+import itertools
 from pathlib import Path
 
 import cv2
@@ -34,7 +35,7 @@ def _border(img: np.ndarray) -> None:
     # Walk the perimeter 20 px inside the edge and lay dashes of the listed lengths.
     path = [(20, 20), (w - 21, 20), (w - 21, h - 21), (20, h - 21), (20, 20)]
     k = 0
-    for (x0, y0), (x1, y1) in zip(path, path[1:], strict=False):
+    for (x0, y0), (x1, y1) in itertools.pairwise(path):
         side = max(abs(x1 - x0), abs(y1 - y0))
         dx, dy = np.sign(x1 - x0), np.sign(y1 - y0)
         s = 6
