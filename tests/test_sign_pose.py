@@ -15,9 +15,11 @@ import numpy as np
 import pytest
 
 from harness.render import Renderer
+from harness.scenario import load_scenario
 from harness.world import load_world
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"
+SCENARIOS = WORLDS / "scenarios"
 NOISE_SIGMA = 2.0
 # Edge displacement below which a tilt goes unseen (see observable_bound): the aligned sign's
 # outline is good to about this (measured 0.05-0.15 px), the tag test allows the same 0.1 px.
@@ -162,3 +164,20 @@ def test_no_flips_over_a_fronto_parallel_sweep(scene, tmp_path):
         assert r["seen"]["found"], pose
         assert r["position_error"] < 0.01, (pose, r["position_error"])
         assert r["angle_error"] < r["bound"], (pose, r["angle_error"])
+
+
+def test_found_from_every_scenario_start_with_the_sign_in_view(scene, tmp_path):
+    """The sign parking scenarios' start frames: found (within 1 cm) iff the sign is in view."""
+    world, _, renderer = scene
+    starts = [load_scenario(p).start for p in sorted(SCENARIOS.glob("parker_sign_*.yaml"))]
+    rows = measure(scene, tmp_path, starts, independent=True)
+    print_table("scenario start frames", rows)
+    for start, r in zip(starts, rows, strict=True):
+        (proj,) = renderer.object_projections(start)
+        u, v = np.array(proj["corners_px"]).T
+        cam = world.camera
+        in_view = bool(((u >= 0) & (u < cam.width) & (v >= 0) & (v < cam.height)).all())
+        assert r["seen"]["found"] == in_view, start
+        if in_view:
+            assert r["position_error"] < 0.01, (start, r["position_error"])
+    assert sum(r["seen"]["found"] for r in rows) == 8
