@@ -19,5 +19,5 @@ def worlds() -> dict[str, World]:
     """The shipped worlds, loaded once."""
     return {
         name: load_world(WORLDS / f"{name}.yaml")
-        for name in ("course", "rgb", "dumpster", "parking")
+        for name in ("course", "rgb", "dumpster", "parking", "parking_sign")
     }

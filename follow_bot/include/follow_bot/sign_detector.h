@@ -1,0 +1,91 @@
+// Finds a known textured sign (a reference picture of known physical width) in camera images and
+// measures its pose: SIFT features of the reference, matched with Lowe's ratio test, a RANSAC
+// homography with an inlier minimum, refined by aligning the image (ECC) to a rendering of the
+// reference under that homography (keypoints alone are good to ~0.3 px, too coarse for the tilt
+// and depth of a far sign), then the planar pose from the refined homography and the sign's
+// metric size (IPPE, both solutions, LM-refined).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+#include "follow_bot/marker_target.h"
+
+namespace follow_bot {
+
+struct SignDetectorConfig {
+  std::string image_path;  // reference picture of the sign's face, read as grey levels
+  double width_m = 0.0;    // physical width of that picture; its height follows the aspect ratio
+  double ratio = 0.75;     // Lowe's ratio: best match distance / second best must be below it
+  int min_inliers = 15;    // RANSAC inliers needed to accept a detection
+  double ransac_threshold_px = 3.0;        // reprojection distance that makes a RANSAC inlier
+  int max_reference_features = 3000;       // strongest reference keypoints kept (0 = all)
+  int min_reference_features = 50;         // fewer makes the reference featureless: startup error
+  int max_image_features = 0;              // strongest keypoints kept per camera image (0 = all)
+  double max_reprojection_error_px = 2.0;  // RMS over the inliers of the final pose, else rejected
+  int refine_passes = 2;       // render-and-align (ECC) passes before the pose; 0 = keypoints only
+  int refine_iterations = 30;  // ECC iteration limit per pass
+  double min_correlation = 0.8;      // ECC correlation needed to use the refined homography
+  double max_refine_shift_px = 3.0;  // larger corner moves by ECC mean it diverged: keep RANSAC's
+  // When the two planar-pose solutions' RMS errors differ by less than this (pixels), they cannot
+  // be told apart reliably and the one nearest the previous frame's pose is kept.
+  double ambiguity_px = 0.05;
+};
+
+// Empty when the configuration is usable (the image itself is checked by the constructor),
+// otherwise a message naming the first bad field.
+std::string validate(const SignDetectorConfig& config);
+
+class SignDetector : public MarkerDetector {
+ public:
+  // Reads the reference and computes its features once. Throws std::invalid_argument when the
+  // configuration is invalid, the image is missing or unreadable, or it has too few features.
+  explicit SignDetector(const SignDetectorConfig& config);
+
+  // The sign in a mono8 image (id 0, quality = inlier count), or nothing. Remembers the pose it
+  // returns to settle the planar ambiguity of the next frame.
+  std::optional<MarkerObservation> detect(const cv::Mat& gray,
+                                          const CameraGeometry& camera) override;
+
+  // Forget the previous pose (e.g. after the sign was lost for a while).
+  void reset() {
+    previous_rotation_.reset();
+    search_window_.reset();
+  }
+
+  int referenceFeatures() const { return static_cast<int>(reference_points_.size()); }
+  double heightMetres() const { return height_m_; }
+
+ private:
+  struct Matches {
+    cv::Matx33d plane_to_image;       // RANSAC homography, sign plane (metres) to pixels
+    std::vector<cv::Point3f> object;  // inliers on the sign plane
+    std::vector<cv::Point2f> image;   // ... and in the image
+  };
+  // SIFT keypoints inside `window` (optionally found on a half-resolution copy), matched and
+  // RANSAC-filtered; nothing below min_inliers or for a mirrored fit.
+  std::optional<Matches> matchIn(const cv::Mat& gray, const cv::Rect& window,
+                                 bool half_resolution) const;
+  // The sign's corners TL, TR, BR, BL on its plane, metres.
+  std::vector<cv::Point2d> outlinePlane() const;
+  // One render-and-align pass on a sign-plane (metres) to image homography, in place; false (and
+  // the homography untouched) when ECC fails, correlates poorly or moves the corners too far.
+  bool refineHomography(const cv::Mat& gray, cv::Matx33d& plane_to_image) const;
+
+  SignDetectorConfig config_;
+  double height_m_ = 0.0;
+  cv::Mat reference_;  // the picture in grey levels
+  cv::Ptr<cv::SIFT> sift_;
+  cv::BFMatcher matcher_{cv::NORM_L2};
+  std::vector<cv::Point3f> reference_points_;  // keypoints on the sign plane, metres, z = 0
+  cv::Mat reference_descriptors_;
+  std::optional<cv::Matx33d> previous_rotation_;
+  std::optional<cv::Rect> search_window_;  // where the sign was last seen, grown
+  bool search_half_resolution_ = false;    // it was big there
+};
+
+}  // namespace follow_bot

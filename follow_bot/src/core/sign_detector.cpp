@@ -1,0 +1,360 @@
+#include "follow_bot/sign_detector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include "follow_bot/config_checks.h"
+
+namespace follow_bot {
+namespace {
+
+// OpenCV's SIFT doubles the image with a resize that puts source pixel x at 2x + 0.5, but scales
+// keypoints back by a plain halving, so every keypoint comes out a quarter pixel right of and
+// below its true position (measured: +0.24 px on a blob of known centre). Undo it so poses are
+// unbiased.
+constexpr float kSiftOffsetPx = 0.25f;
+
+// Pixels along the sign's outline left out of the ECC alignment.
+constexpr int kEdgeBandPx = 4;
+
+// Larger signs are aligned on a block-averaged copy no wider or taller than this.
+constexpr int kAlignMaxPx = 100;
+
+// ECC stops when its correlation coefficient changes by less than this between iterations.
+constexpr double kAlignEpsilon = 1e-6;
+
+// A sign last seen larger than this (its smaller side, pixels) is searched at half resolution.
+constexpr int kHalfResolutionSignPx = 150;
+
+// Extra pixels around the last sighting searched first in the next frame.
+constexpr int kSearchMarginPx = 64;
+
+std::vector<cv::Point2f> keypointPositions(const std::vector<cv::KeyPoint>& keypoints) {
+  std::vector<cv::Point2f> points;
+  points.reserve(keypoints.size());
+  for (const cv::KeyPoint& k : keypoints) {
+    points.emplace_back(k.pt.x - kSiftOffsetPx, k.pt.y - kSiftOffsetPx);
+  }
+  return points;
+}
+
+double rotationAngle(const cv::Matx33d& a, const cv::Matx33d& b) {
+  const cv::Matx33d relative = a.t() * b;
+  const double c = (cv::trace(relative) - 1.0) / 2.0;
+  return std::acos(std::clamp(c, -1.0, 1.0));
+}
+
+// Signed area of a polygon in pixels; positive when its vertices run clockwise on screen (image
+// y points down), which is how TL, TR, BR, BL of a sign seen from the front run.
+double signedArea(const std::vector<cv::Point2f>& polygon) {
+  double area = 0.0;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const cv::Point2f& p = polygon[i];
+    const cv::Point2f& q = polygon[(i + 1) % polygon.size()];
+    area += static_cast<double>(p.x) * q.y - static_cast<double>(q.x) * p.y;
+  }
+  return area / 2.0;
+}
+
+}  // namespace
+
+std::string validate(const SignDetectorConfig& config) {
+  if (config.image_path.empty()) return "image_path must name the sign's reference picture";
+  for (const std::string& error : {
+           requirePositive("width_m", config.width_m),
+           requireInRange("ratio", config.ratio, 0.1, 1.0),
+           requireAtLeast("min_inliers", config.min_inliers, 4),
+           requirePositive("ransac_threshold_px", config.ransac_threshold_px),
+           requireAtLeast("max_reference_features", config.max_reference_features, 0),
+           requireAtLeast("min_reference_features", config.min_reference_features, 4),
+           requireAtLeast("max_image_features", config.max_image_features, 0),
+           requirePositive("max_reprojection_error_px", config.max_reprojection_error_px),
+           requireAtLeast("refine_passes", config.refine_passes, 0),
+           requireAtLeast("refine_iterations", config.refine_iterations, 1),
+           requireInRange("min_correlation", config.min_correlation, 0.0, 1.0),
+           requirePositive("max_refine_shift_px", config.max_refine_shift_px),
+           requireAtLeast("ambiguity_px", config.ambiguity_px, 0.0),
+       }) {
+    if (!error.empty()) return error;
+  }
+  return "";
+}
+
+SignDetector::SignDetector(const SignDetectorConfig& config) : config_(config) {
+  const std::string error = validate(config);
+  if (!error.empty()) throw std::invalid_argument("sign detector: " + error);
+  const cv::Mat reference = cv::imread(config.image_path, cv::IMREAD_GRAYSCALE);
+  if (reference.empty()) {
+    throw std::invalid_argument("sign detector: cannot read the sign image '" + config.image_path +
+                                "' (missing or not an image)");
+  }
+  std::vector<cv::KeyPoint> keypoints;
+  cv::SIFT::create(config.max_reference_features)
+      ->detectAndCompute(reference, cv::noArray(), keypoints, reference_descriptors_);
+  if (static_cast<int>(keypoints.size()) < config.min_reference_features) {
+    std::ostringstream message;
+    message << "sign detector: the sign image '" << config.image_path
+            << "' is featureless: " << keypoints.size() << " SIFT keypoints, need at least "
+            << config.min_reference_features;
+    throw std::invalid_argument(message.str());
+  }
+  // Reference pixel (u, v), centres at integers, to the sign plane: origin at the picture's
+  // centre, x right, y down, metres.
+  const double metres_per_px = config.width_m / reference.cols;
+  height_m_ = metres_per_px * reference.rows;
+  for (const cv::Point2f& p : keypointPositions(keypoints)) {
+    reference_points_.emplace_back((p.x + 0.5) * metres_per_px - config.width_m / 2.0,
+                                   (p.y + 0.5) * metres_per_px - height_m_ / 2.0, 0.0f);
+  }
+  sift_ = cv::SIFT::create(config.max_image_features);
+  reference_ = reference;
+}
+
+bool SignDetector::refineHomography(const cv::Mat& gray, cv::Matx33d& plane_to_image) const {
+  // Render the sign as the camera would see it under the current homography (area-sampled like
+  // a sensor pixel), then align the camera image to that rendering with ECC. Aligning against a
+  // picture with the same perspective and blur everywhere is what makes the refinement unbiased:
+  // a fronto-parallel template biased oblique and far signs by up to 0.7 % of their range.
+  const std::vector<cv::Point2d> outline = outlinePlane();
+  std::vector<cv::Point2d> before;
+  cv::perspectiveTransform(outline, before, plane_to_image);
+  cv::Rect roi = cv::boundingRect(std::vector<cv::Point2f>(before.begin(), before.end())) &
+                 cv::Rect(0, 0, gray.cols, gray.rows);
+  // A big sign is aligned on a block-averaged copy: its pose is well conditioned anyway, and
+  // ECC's cost grows with the pixel count.
+  const int f = std::max(1, static_cast<int>(std::ceil(std::max(roi.width, roi.height) /
+                                                       static_cast<double>(kAlignMaxPx))));
+  roi.width -= roi.width % f;
+  roi.height -= roi.height % f;
+  const cv::Size size(roi.width / f, roi.height / f);
+  if (size.width < 16 || size.height < 16) return false;
+  cv::Mat camera_view = gray(roi);
+  if (f > 1) cv::resize(camera_view, camera_view, size, 0, 0, cv::INTER_AREA);
+  // Image pixel p to aligned pixel (p - roi + 0.5) / f - 0.5 (pixel centres at integers).
+  const double inv_f = 1.0 / f;
+  const cv::Matx33d image_to_view(inv_f, 0.0, (0.5 - roi.x) * inv_f - 0.5, 0.0, inv_f,
+                                  (0.5 - roi.y) * inv_f - 0.5, 0.0, 0.0, 1.0);
+  const cv::Matx33d plane_to_view = image_to_view * plane_to_image;
+
+  const double area = static_cast<double>(size.width) * size.height;
+  const int ss = area <= 40000 ? 4 : area <= 160000 ? 2 : 1;  // supersampling of the rendering
+  // Source texture no finer than the supersampled view, so bilinear sampling does not alias.
+  const double width_px = (cv::norm(before[1] - before[0]) + cv::norm(before[2] - before[3])) / 2;
+  const int cols =
+      std::clamp(static_cast<int>(std::lround(width_px * inv_f * ss)), 16, reference_.cols);
+  cv::Mat texture = reference_;
+  if (cols < reference_.cols) {
+    const int rows =
+        std::max(16, static_cast<int>(std::lround(cols * height_m_ / config_.width_m)));
+    cv::resize(reference_, texture, cv::Size(cols, rows), 0, 0, cv::INTER_AREA);
+  }
+  // Texture texel (u, v), centres at integers, to the sign plane; view pixel to the fine grid
+  // (fine sample k sits at view pixel (k + 0.5) / ss - 0.5).
+  const double mx = config_.width_m / texture.cols;
+  const double my = height_m_ / texture.rows;
+  const cv::Matx33d texel_to_plane(mx, 0.0, 0.5 * mx - config_.width_m / 2, 0.0, my,
+                                   0.5 * my - height_m_ / 2, 0.0, 0.0, 1.0);
+  const cv::Matx33d view_to_fine(ss, 0.0, (ss - 1) / 2.0, 0.0, ss, (ss - 1) / 2.0, 0.0, 0.0, 1.0);
+  cv::Mat fine, rendered;
+  cv::warpPerspective(texture, fine, cv::Mat(view_to_fine * plane_to_view * texel_to_plane),
+                      size * ss, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::resize(fine, rendered, size, 0, 0, cv::INTER_AREA);
+  // Only pixels well inside the sign count: within kEdgeBandPx of its outline the camera sees
+  // the sign blended with an unknown background (blurred further by ECC's 5x5 Gaussian).
+  std::vector<cv::Point2d> outline_view;
+  cv::perspectiveTransform(outline, outline_view, plane_to_view);
+  std::vector<cv::Point> polygon;
+  for (const cv::Point2d& p : outline_view)
+    polygon.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
+  cv::Mat mask = cv::Mat::zeros(size, CV_8UC1);
+  cv::fillConvexPoly(mask, polygon, cv::Scalar(255), cv::LINE_8, 4);
+  const cv::Size band(2 * kEdgeBandPx + 1, 2 * kEdgeBandPx + 1);
+  cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, band));
+
+  // ECC warp: camera view pixel -> rendering pixel, starting at the identity.
+  cv::Mat warp = cv::Mat::eye(3, 3, CV_32F);
+  double correlation = 0.0;
+  try {
+    correlation =
+        cv::findTransformECC(camera_view, rendered, warp, cv::MOTION_HOMOGRAPHY,
+                             cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
+                                              config_.refine_iterations, kAlignEpsilon),
+                             mask, 5);
+  } catch (const cv::Exception&) {
+    return false;  // ECC did not converge
+  }
+  if (!(correlation >= config_.min_correlation)) return false;
+  cv::Mat warp64;
+  warp.convertTo(warp64, CV_64F);
+  // rendering(S p) = camera(p) with S = V^-1 W V (V: image to view), and the rendering shows the
+  // picture through H, so the camera sees it through S^-1 H.
+  const cv::Matx33d image_to_rendering =
+      image_to_view.inv() * cv::Matx33d(warp64.ptr<double>()) * image_to_view;
+  cv::Matx33d refined = image_to_rendering.inv() * plane_to_image;
+  refined *= 1.0 / refined(2, 2);
+  std::vector<cv::Point2d> after;
+  cv::perspectiveTransform(outline, after, refined);
+  for (size_t i = 0; i < after.size(); ++i) {
+    if (!(cv::norm(after[i] - before[i]) <= config_.max_refine_shift_px)) return false;
+  }
+  plane_to_image = refined;
+  return true;
+}
+
+std::optional<SignDetector::Matches> SignDetector::matchIn(const cv::Mat& gray,
+                                                           const cv::Rect& window,
+                                                           bool half_resolution) const {
+  cv::Mat searched = gray(window);
+  if (half_resolution) {
+    cv::resize(searched, searched, cv::Size(window.width / 2, window.height / 2), 0, 0,
+               cv::INTER_AREA);
+  }
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  sift_->detectAndCompute(searched, cv::noArray(), keypoints, descriptors);
+  if (static_cast<int>(keypoints.size()) < config_.min_inliers) return std::nullopt;
+
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher_.knnMatch(descriptors, reference_descriptors_, knn, 2);
+  std::vector<cv::Point2f> window_positions = keypointPositions(keypoints);
+  if (half_resolution) {  // half-resolution pixel q covers full pixels 2q and 2q + 1
+    for (cv::Point2f& p : window_positions) p = p * 2.0f + cv::Point2f(0.5f, 0.5f);
+  }
+  const cv::Point2f offset(static_cast<float>(window.x), static_cast<float>(window.y));
+  std::vector<cv::Point3f> object_points;
+  std::vector<cv::Point2f> plane_points, image_points;
+  for (const std::vector<cv::DMatch>& pair : knn) {
+    if (pair.size() < 2 || pair[0].distance >= config_.ratio * pair[1].distance) continue;
+    const cv::Point3f& p = reference_points_[pair[0].trainIdx];
+    object_points.push_back(p);
+    plane_points.emplace_back(p.x, p.y);
+    image_points.push_back(window_positions[pair[0].queryIdx] + offset);
+  }
+  if (static_cast<int>(image_points.size()) < config_.min_inliers) return std::nullopt;
+
+  // Homography from the sign plane (metres) to pixels; the threshold is in image pixels.
+  std::vector<unsigned char> inlier_mask;
+  const cv::Mat homography =
+      cv::findHomography(plane_points, image_points, cv::RANSAC, config_.ransac_threshold_px,
+                         inlier_mask, 2000, 0.999);
+  if (homography.empty()) return std::nullopt;
+  Matches matches;
+  matches.plane_to_image = cv::Matx33d(homography.ptr<double>());
+  for (size_t i = 0; i < inlier_mask.size(); ++i) {
+    if (!inlier_mask[i]) continue;
+    matches.object.push_back(object_points[i]);
+    matches.image.push_back(image_points[i]);
+  }
+  if (static_cast<int>(matches.image.size()) < config_.min_inliers) return std::nullopt;
+
+  // The sign must appear unmirrored: a homography that flips it is a false match.
+  std::vector<cv::Point2d> outline;
+  cv::perspectiveTransform(outlinePlane(), outline, matches.plane_to_image);
+  const std::vector<cv::Point2f> outline_f(outline.begin(), outline.end());
+  if (!cv::isContourConvex(outline_f) || signedArea(outline_f) <= 0.0) return std::nullopt;
+  return matches;
+}
+
+std::vector<cv::Point2d> SignDetector::outlinePlane() const {
+  const double half_w = config_.width_m / 2.0;
+  const double half_h = height_m_ / 2.0;
+  return {{-half_w, -half_h}, {half_w, -half_h}, {half_w, half_h}, {-half_w, half_h}};
+}
+
+std::optional<MarkerObservation> SignDetector::detect(const cv::Mat& gray,
+                                                      const CameraGeometry& camera) {
+  if (gray.empty() || gray.type() != CV_8UC1) return std::nullopt;
+  const cv::Rect whole(0, 0, gray.cols, gray.rows);
+  // Search near the last sighting first: SIFT over the whole frame is most of the cost.
+  std::optional<Matches> matches;
+  if (search_window_) matches = matchIn(gray, *search_window_ & whole, search_half_resolution_);
+  if (!matches && search_window_ != whole) matches = matchIn(gray, whole, false);
+  search_window_.reset();
+  if (!matches) return std::nullopt;
+  const std::vector<cv::Point3f>& inlier_object = matches->object;
+  const std::vector<cv::Point2f>& inlier_image = matches->image;
+
+  // Pose points: a grid over the sign mapped by the ECC-refined homography, or else the inlier
+  // keypoints themselves. A second pass renders from the first pass's better homography.
+  cv::Matx33d plane_to_image = matches->plane_to_image;
+  std::vector<cv::Point3f> pose_object = inlier_object;
+  std::vector<cv::Point2f> pose_image = inlier_image;
+  int passes = 0;
+  while (passes < config_.refine_passes && refineHomography(gray, plane_to_image)) ++passes;
+  if (passes > 0) {
+    pose_object.clear();
+    std::vector<cv::Point2f> grid;
+    for (double fy : {-0.5, -0.25, 0.0, 0.25, 0.5}) {
+      for (double fx : {-0.5, -0.25, 0.0, 0.25, 0.5}) {
+        pose_object.emplace_back(fx * config_.width_m, fy * height_m_, 0.0f);
+        grid.emplace_back(pose_object.back().x, pose_object.back().y);
+      }
+    }
+    cv::perspectiveTransform(grid, pose_image, cv::Mat(plane_to_image));
+  }
+
+  // Planar pose: IPPE gives both solutions of the plane's two-fold ambiguity, best first.
+  const cv::Matx33d k(camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0);
+  std::vector<cv::Mat> rvecs, tvecs;
+  cv::Mat errors;
+  const int solutions =
+      cv::solvePnPGeneric(pose_object, pose_image, k, cv::noArray(), rvecs, tvecs, false,
+                          cv::SOLVEPNP_IPPE, cv::noArray(), cv::noArray(), errors);
+  if (solutions < 1) return std::nullopt;
+  std::vector<cv::Matx33d> rotations(solutions);
+  for (int i = 0; i < solutions; ++i) cv::Rodrigues(rvecs[i], rotations[i]);
+  int chosen = 0;
+  if (solutions == 2 && previous_rotation_ &&
+      errors.at<double>(1) - errors.at<double>(0) < config_.ambiguity_px &&
+      rotationAngle(*previous_rotation_, rotations[1]) <
+          rotationAngle(*previous_rotation_, rotations[0])) {
+    chosen = 1;
+  }
+  cv::Mat rvec = rvecs[chosen].clone();
+  cv::Mat tvec = tvecs[chosen].clone();
+  cv::solvePnPRefineLM(pose_object, pose_image, k, cv::noArray(), rvec, tvec);
+
+  MarkerObservation observation;
+  observation.id = 0;
+  cv::Rodrigues(rvec, observation.rotation);
+  observation.translation = cv::Vec3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+  if (!(observation.translation[2] > 0.0)) return std::nullopt;
+
+  std::vector<cv::Point2f> reprojected;
+  cv::projectPoints(inlier_object, rvec, tvec, k, cv::noArray(), reprojected);
+  double squared = 0.0;
+  for (size_t i = 0; i < reprojected.size(); ++i) {
+    const cv::Point2f d = reprojected[i] - inlier_image[i];
+    squared += d.dot(d);
+  }
+  observation.reprojection_error_px = std::sqrt(squared / reprojected.size());
+  if (!(observation.reprojection_error_px <= config_.max_reprojection_error_px)) {
+    return std::nullopt;
+  }
+  std::vector<cv::Point3f> outline3d;
+  for (const cv::Point2d& c : outlinePlane()) outline3d.emplace_back(c.x, c.y, 0.0f);
+  std::vector<cv::Point2f> corners;
+  cv::projectPoints(outline3d, rvec, tvec, k, cv::noArray(), corners);
+  for (size_t i = 0; i < 4; ++i) observation.corners[i] = corners[i];
+  observation.quality = static_cast<double>(inlier_image.size());
+  previous_rotation_ = observation.rotation;
+  // Next search window: the sign's box grown by half its size and kSearchMarginPx each way,
+  // enough for a turn at the robot's top rate between two frames. A big sign has plenty of
+  // keypoints at half resolution (the alignment restores the accuracy) for a quarter of the cost.
+  const cv::Rect box = cv::boundingRect(corners);
+  search_half_resolution_ = std::min(box.width, box.height) > kHalfResolutionSignPx;
+  const int grow_x = box.width / 2 + kSearchMarginPx;
+  const int grow_y = box.height / 2 + kSearchMarginPx;
+  search_window_ =
+      cv::Rect(box.x - grow_x, box.y - grow_y, box.width + 2 * grow_x, box.height + 2 * grow_y);
+  return observation;
+}
+
+}  // namespace follow_bot
