@@ -36,6 +36,10 @@ def master_env():
         ("follow_bot beacon_chaser", "_stop_distance:=0", "stop_distance"),
         ("image_converter image_converter", "_circle_radius:=0", "~circle_radius"),
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
+        ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),
+        ("image_converter panorama", "_detector:=surf", "~detector must be orb or sift"),
+        ("image_converter panorama", "_step_angle_deg:=0", "step_angle must be"),
+        ("image_converter panorama", "_limit_angular:=0", "~limit_angular_accel: max_angular"),
     ],
 )
 def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, request):

@@ -1,4 +1,4 @@
-#include "follow_bot/velocity_limiter.h"
+#include "image_converter/velocity_limiter.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <random>
 #include <stdexcept>
 
-namespace follow_bot {
+namespace image_converter {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -160,4 +160,4 @@ TEST(VelocityLimiter, OutputIsAlwaysFiniteAndWithinBounds) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace image_converter

@@ -1,0 +1,61 @@
+// Feature matching between two views: keypoints, ratio-tested matches and a RANSAC homography.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+
+namespace image_converter {
+
+enum class Detector { kOrb, kSift };
+
+// "orb" or "sift" (lower case); false for anything else.
+bool parseDetector(const std::string& name, Detector& detector);
+std::string detectorName(Detector detector);
+
+struct MatchOptions {
+  Detector detector = Detector::kOrb;
+  int max_features = 4000;           // keypoints kept per image
+  double ratio = 0.75;               // Lowe's ratio test: best / second-best distance below this
+  double ransac_threshold_px = 3.0;  // inlier tolerance of the RANSAC homography
+  int min_inliers = 25;              // fewer inliers: the views are taken not to overlap
+  double min_contrast = 2.0;         // grey-level standard deviation below this: a blank image
+  // Refine the RANSAC homography by dense ECC alignment of the overlap (cv::findTransformECC):
+  // keypoints sit on a coarse pyramid grid (ORB), the aligned pixels do not.
+  bool refine = true;
+};
+
+// Empty when the options are usable, otherwise a message naming the first bad field.
+std::string validate(const MatchOptions& options);
+
+// The homography between two views, or why there is none.
+struct PairMatch {
+  std::string error;  // empty when the homography is trustworthy
+  // Maps pixels of image B into image A's pixel frame: a ~ H * b (homogeneous).
+  cv::Matx33d homography = cv::Matx33d::eye();
+  int keypoints_a = 0;
+  int keypoints_b = 0;
+  int matches = 0;  // after the ratio test
+  int inliers = 0;
+  double reprojection_error_px = 0.0;  // RMS over inliers of |H b - a|
+  bool refined = false;                // ECC refinement converged and was kept
+  bool ok() const { return error.empty(); }
+};
+
+// The configured keypoint detector and descriptor (ORB or SIFT, max_features keypoints).
+cv::Ptr<cv::Feature2D> createDetector(const MatchOptions& options);
+
+// Empty when `image` is usable for matching (non-empty, 8-bit grey/BGR/BGRA, not blank),
+// otherwise the reason, naming the image by `label`.
+std::string checkImage(const cv::Mat& image, const std::string& label, double min_contrast);
+
+// Matches image B against image A (8-bit grey, BGR or BGRA). Never throws on bad input: the
+// result carries the error (blank image, too few features or inliers, degenerate homography).
+PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& options);
+
+// The pixel a homography maps `point` to.
+cv::Point2d applyHomography(const cv::Matx33d& homography, const cv::Point2d& point);
+
+}  // namespace image_converter

@@ -1,0 +1,327 @@
+// Panorama: on a ~capture call the robot turns in place through a set of headings, grabs a
+// frame at each, stitches them and publishes the panorama (latched) on ~panorama.
+//
+// Thin wiring around PanoramaCapture (the turn schedule), the stitching core and the shared
+// VelocityLimiter. One camera frame in, one Twist out (zero while idle), so it runs under the
+// lockstep simulator as well as on a robot. The service waits on its own callback queue while
+// the frames drive the capture on the nodelet's queue.
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <cv_bridge/cv_bridge.h>
+#include <geometry_msgs/Twist.h>
+#include <image_transport/image_transport.h>
+#include <nav_msgs/Odometry.h>
+#include <nodelet/nodelet.h>
+#include <ros/callback_queue.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <std_srvs/Trigger.h>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "image_converter/panorama_capture.h"
+#include "image_converter/panorama_nodelet.h"
+#include "image_converter/ros/frame_msg.h"
+#include "image_converter/stitching.h"
+#include "image_converter/velocity_limiter.h"
+
+namespace image_converter {
+
+namespace {
+
+constexpr double kPi = 3.141592653589793;
+
+enum class StitchMethod { kAuto, kFeatures, kRotation };
+
+template <typename T>
+T param(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
+  T value = fallback;
+  pnh.param(name, value, fallback);
+  return value;
+}
+
+void throwIfError(const std::string& what, const std::string& error) {
+  if (!error.empty()) throw std::invalid_argument(what + ": " + error);
+}
+
+double yawOf(const nav_msgs::Odometry& odom) {
+  const geometry_msgs::Quaternion& q = odom.pose.pose.orientation;
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+}  // namespace
+
+class PanoramaNodelet : public nodelet::Nodelet {
+ public:
+  ~PanoramaNodelet() override {
+    if (spinner_) spinner_->stop();
+    if (cmd_pub_) cmd_pub_.publish(geometry_msgs::Twist());  // leave the robot standing
+  }
+
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    readParams(pnh);  // throws on bad ~params
+
+    cmd_pub_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
+    panorama_pub_ = pnh.advertise<sensor_msgs::Image>("panorama", 1, /*latch=*/true);
+    camera_info_sub_ = nh.subscribe("camera_info", 1, &PanoramaNodelet::onCameraInfo, this);
+    odom_sub_ = nh.subscribe("odom", 1, &PanoramaNodelet::onOdom, this);
+    image_transport::ImageTransport transport(nh);
+    image_sub_ = transport.subscribe("image", 1, &PanoramaNodelet::onImage, this);
+
+    // The service blocks until the capture ends, so it gets a queue and thread of its own.
+    ros::NodeHandle service_nh(pnh);
+    service_nh.setCallbackQueue(&service_queue_);
+    capture_srv_ = service_nh.advertiseService("capture", &PanoramaNodelet::onCapture, this);
+    spinner_ = std::make_unique<ros::AsyncSpinner>(1, &service_queue_);
+    spinner_->start();
+  }
+
+  void readParams(const ros::NodeHandle& pnh) {
+    PanoramaCaptureConfig capture;
+    capture.total_angle = param(pnh, "total_angle_deg", 120.0) * kPi / 180.0;
+    capture.step_angle = param(pnh, "step_angle_deg", 20.0) * kPi / 180.0;
+    capture.max_turn_rate = param(pnh, "turn_rate", capture.max_turn_rate);
+    capture.min_turn_rate = param(pnh, "min_turn_rate", capture.min_turn_rate);
+    capture.yaw_gain = param(pnh, "yaw_gain", capture.yaw_gain);
+    capture.yaw_tolerance = param(pnh, "yaw_tolerance_deg", 0.5) * kPi / 180.0;
+    capture.settle_frames = param(pnh, "settle_frames", capture.settle_frames);
+    capture.return_to_start = param(pnh, "return_to_start", capture.return_to_start);
+    throwIfError("capture parameters", validate(capture));
+    capture_ = std::make_unique<PanoramaCapture>(capture);
+
+    const std::string detector = param<std::string>(pnh, "detector", "orb");
+    if (!parseDetector(detector, match_options_.detector)) {
+      throw std::invalid_argument("~detector must be orb or sift, got '" + detector + "'");
+    }
+    match_options_.min_inliers = param(pnh, "min_inliers", match_options_.min_inliers);
+    throwIfError("matching parameters", validate(match_options_));
+
+    const std::string method = param<std::string>(pnh, "stitch_method", "auto");
+    if (method == "auto") {
+      method_ = StitchMethod::kAuto;
+    } else if (method == "features") {
+      method_ = StitchMethod::kFeatures;
+    } else if (method == "rotation") {
+      method_ = StitchMethod::kRotation;
+    } else {
+      throw std::invalid_argument("~stitch_method must be auto, features or rotation, got '" +
+                                  method + "'");
+    }
+    camera_.pitch = param(pnh, "camera_pitch_deg", 0.0) * kPi / 180.0;
+    if (!(std::abs(camera_.pitch) < 1.5)) {
+      throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
+    }
+
+    VelocityLimiterConfig limits;
+    limits.max_angular = param(pnh, "limit_angular", limits.max_angular);
+    limits.max_angular_accel = param(pnh, "limit_angular_accel", limits.max_angular_accel);
+    throwIfError("~limit_angular, ~limit_angular_accel", validate(limits));
+    limiter_ = std::make_unique<VelocityLimiter>(limits);
+
+    frame_timeout_ = param(pnh, "frame_timeout", 1.0);
+    capture_timeout_ = param(pnh, "capture_timeout", 120.0);
+    if (!(frame_timeout_ > 0.0) || !(capture_timeout_ > 0.0)) {
+      throw std::invalid_argument("~frame_timeout and ~capture_timeout must be > 0 s");
+    }
+  }
+
+  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    TurningCamera updated = camera_;
+    updated.fx = info->K[0];
+    updated.fy = info->K[4];
+    updated.cx = info->K[2];
+    updated.cy = info->K[5];
+    const std::string error = validate(updated);
+    if (!error.empty()) {
+      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
+      return;
+    }
+    camera_ = updated;
+    has_intrinsics_ = true;
+  }
+
+  void onOdom(const nav_msgs::OdometryConstPtr& odom) {
+    const double yaw = yawOf(*odom);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (std::isfinite(yaw)) yaw_ = yaw;
+  }
+
+  bool onCapture(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (start_requested_ || capture_->active()) {
+      response.message = "a capture is already running";
+      return true;
+    }
+    const double since_frame = ros::WallTime::now().toSec() - last_frame_wall_;
+    if (!yaw_ || !has_intrinsics_ || since_frame > frame_timeout_) {
+      response.message =
+          std::string("cannot capture: ") +
+          (!yaw_              ? "no pose yet on " + odom_sub_.getTopic()
+           : !has_intrinsics_ ? "no camera_info yet on " + camera_info_sub_.getTopic()
+                              : "no camera frames on " + image_sub_.getTopic());
+      return true;
+    }
+    start_requested_ = true;
+    outcome_.reset();
+    const ros::Time started = ros::Time::now();
+    // Frames drive the capture; this thread only watches for its end or for lost frames.
+    while (!outcome_) {
+      changed_.wait_for(lock, std::chrono::milliseconds(100));
+      if (outcome_) break;
+      const double silent = ros::WallTime::now().toSec() - last_frame_wall_;
+      const bool timed_out = (ros::Time::now() - started).toSec() > capture_timeout_;
+      if (silent > frame_timeout_ || timed_out || !ros::ok()) {
+        capture_->abort();
+        start_requested_ = false;
+        cmd_pub_.publish(geometry_msgs::Twist());
+        limiter_->stop();
+        outcome_ = Outcome{false, timed_out ? "capture took longer than ~capture_timeout"
+                                            : "camera frames stopped during the capture"};
+      }
+    }
+    response.success = outcome_->success;
+    response.message = outcome_->message;
+    return true;
+  }
+
+  void onImage(const sensor_msgs::ImageConstPtr& msg) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const FrameCheck check = checkFrame(rawFrameOf(*msg));
+    cv_bridge::CvImageConstPtr frame;
+    std::string error = check.error;
+    if (check.ok()) {
+      try {
+        frame = cv_bridge::toCvShare(msg, "bgr8");
+      } catch (const cv_bridge::Exception& exception) {
+        error = exception.what();
+      }
+    }
+    if (!frame) {
+      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
+      return;
+    }
+    last_frame_wall_ = ros::WallTime::now().toSec();
+    const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
+    const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
+    last_stamp_ = stamp;
+
+    if (start_requested_ && yaw_) {
+      start_requested_ = false;
+      capture_->start(*yaw_);
+      frames_.clear();
+      yaws_.clear();
+    }
+    PanoramaCapture::Step step;
+    if (capture_->active() && yaw_) step = capture_->update(*yaw_);
+    if (step.grab) {
+      frames_.push_back(frame->image.clone());
+      yaws_.push_back(*yaw_);
+    }
+    Twist2D desired;
+    desired.angular = step.angular;
+    publish(limiter_->limit(desired, dt));
+    if (!step.finished) return;
+
+    // Answer this frame first: stitching takes a while and the base should not wait for it.
+    const Outcome outcome = stitchAndPublish(msg->header);
+    outcome_ = outcome;
+    changed_.notify_all();
+    if (outcome.success) {
+      NODELET_INFO("panorama: %s", outcome.message.c_str());
+    } else {
+      NODELET_ERROR("panorama: %s", outcome.message.c_str());
+    }
+  }
+
+  struct Outcome {
+    bool success = false;
+    std::string message;
+  };
+
+  Outcome stitchAndPublish(const std_msgs::Header& header) {
+    const double span_deg = std::abs(wrapAngle(yaws_.front() - yaws_.back())) * 180.0 / kPi;
+    std::string notes;
+    StitchResult result;
+    std::string used;
+    if (method_ != StitchMethod::kRotation) {
+      result = stitchMany(frames_, match_options_);
+      used = "features (cv::Stitcher, " + detectorName(match_options_.detector) + ")";
+      if (result.ok()) result.error = checkWidth(result.panorama.cols);
+      if (!result.ok() && method_ == StitchMethod::kAuto) {
+        notes = "; feature stitching failed (" + result.error + "), used the odometry yaws";
+      }
+    }
+    if (method_ == StitchMethod::kRotation || (method_ == StitchMethod::kAuto && !result.ok())) {
+      result = stitchByRotation(frames_, yaws_, camera_);
+      used = "rotation (odometry yaws)";
+    }
+    if (!result.ok()) return {false, "stitching failed: " + result.error};
+    cv_bridge::CvImage image(header, "bgr8", result.panorama);
+    panorama_pub_.publish(image.toImageMsg());
+    char summary[160];
+    std::snprintf(summary, sizeof summary, "%d x %d px from %zu frames over %.0f deg by ",
+                  result.panorama.cols, result.panorama.rows, frames_.size(), span_deg);
+    return {true, summary + used + notes};
+  }
+
+  // A feature panorama must be about as wide as the turn says: fx * (span + field of view).
+  // Wrong links between look-alike views give panoramas of the wrong width.
+  std::string checkWidth(int width) const {
+    const double span = std::abs(wrapAngle(yaws_.front() - yaws_.back()));
+    const double fov = 2.0 * std::atan(frames_.front().cols / (2.0 * camera_.fx));
+    const double expected = camera_.fx * (span + fov);
+    if (std::abs(width - expected) <= 0.15 * expected) return "";
+    return "panorama " + std::to_string(width) + " px wide where the turn predicts " +
+           std::to_string(static_cast<int>(expected)) + " px";
+  }
+
+  void publish(const Twist2D& command) {
+    geometry_msgs::Twist msg;
+    msg.linear.x = command.linear;
+    msg.angular.z = command.angular;
+    cmd_pub_.publish(msg);
+  }
+
+  std::mutex mutex_;
+  std::condition_variable changed_;
+  std::unique_ptr<PanoramaCapture> capture_;
+  std::unique_ptr<VelocityLimiter> limiter_;
+  MatchOptions match_options_;
+  StitchMethod method_ = StitchMethod::kAuto;
+  TurningCamera camera_;
+  bool has_intrinsics_ = false;
+  std::optional<double> yaw_;
+  double frame_timeout_ = 1.0;
+  double capture_timeout_ = 120.0;
+  double last_frame_wall_ = -1e9;
+  ros::Time last_stamp_;
+  bool start_requested_ = false;
+  std::optional<Outcome> outcome_;
+  std::vector<cv::Mat> frames_;
+  std::vector<double> yaws_;
+
+  ros::Publisher cmd_pub_, panorama_pub_;
+  ros::Subscriber camera_info_sub_, odom_sub_;
+  image_transport::Subscriber image_sub_;
+  ros::CallbackQueue service_queue_;
+  ros::ServiceServer capture_srv_;
+  std::unique_ptr<ros::AsyncSpinner> spinner_;
+};
+
+std::unique_ptr<nodelet::Nodelet> makePanoramaNodelet() {
+  return std::make_unique<PanoramaNodelet>();
+}
+
+}  // namespace image_converter
+
+PLUGINLIB_EXPORT_CLASS(image_converter::PanoramaNodelet, nodelet::Nodelet)
