@@ -1,5 +1,6 @@
 // rostest: the beacon chaser through its topics (wall time, no simulator), fed bad input.
 #include <cv_bridge/cv_bridge.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/Twist.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
@@ -9,6 +10,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
@@ -232,6 +234,87 @@ TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
     max_linear = std::max(max_linear, replies[0].linear.x);
   }
   EXPECT_GT(max_linear, 0.05) << "with intrinsics the ball is ranged and approached";
+}
+
+// Sends one dynamic_reconfigure update (string and double parameters) to `node` and returns
+// the configuration its server reports back.
+dynamic_reconfigure::Config reconfigure(
+    const std::string& node, const std::vector<std::pair<std::string, std::string>>& strs,
+    const std::vector<std::pair<std::string, double>>& doubles) {
+  dynamic_reconfigure::Reconfigure call;
+  for (const auto& [name, value] : strs) {
+    dynamic_reconfigure::StrParameter param;
+    param.name = name;
+    param.value = value;
+    call.request.config.strs.push_back(param);
+  }
+  for (const auto& [name, value] : doubles) {
+    dynamic_reconfigure::DoubleParameter param;
+    param.name = name;
+    param.value = value;
+    call.request.config.doubles.push_back(param);
+  }
+  EXPECT_TRUE(ros::service::call(node + "/set_parameters", call));
+  return call.response.config;
+}
+
+std::string strIn(const dynamic_reconfigure::Config& config, const std::string& name) {
+  for (const auto& param : config.strs) {
+    if (param.name == name) return param.value;
+  }
+  return "<missing>";
+}
+
+double doubleIn(const dynamic_reconfigure::Config& config, const std::string& name) {
+  for (const auto& param : config.doubles) {
+    if (param.name == name) return param.value;
+  }
+  return std::nan("");
+}
+
+// Live updates: applied whole, clamped to the .cfg ranges, or refused whole when the core
+// rejects the combination (the server then reports the settings still in force).
+TEST_F(BeaconChaserNode, ReconfigureAppliesClampsOrRefusesWhole) {
+  ASSERT_TRUE(ros::service::waitForService("/beacon_follow/set_parameters", 10000));
+  const cv::Mat green_ball = floorWithBall(kGreen);
+
+  // Swap the roles: green now stops the robot.
+  auto config =
+      reconfigure("/beacon_follow", {{"follow_colour", "blue"}, {"stop_colour", "green"}}, {});
+  EXPECT_EQ(strIn(config, "follow_colour"), "blue");
+  EXPECT_EQ(strIn(config, "stop_colour"), "green");
+  for (int i = 0; i < 5; ++i) {
+    const auto replies = send(follow_, frame(green_ball));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(isZero(replies[0])) << "green is the stop colour now";
+  }
+
+  // Equal follow and stop colours, together with a valid gain: nothing of it is applied.
+  config = reconfigure("/beacon_follow", {{"follow_colour", "green"}}, {{"turn_gain", 2.5}});
+  EXPECT_EQ(strIn(config, "follow_colour"), "blue");
+  EXPECT_EQ(doubleIn(config, "turn_gain"), 1.5);
+  spinFor(0.5);  // rosout is asynchronous
+  EXPECT_GE(logsFrom("/beacon_follow", "rejected reconfiguration"), 1);
+
+  // An unknown colour name is refused the same way.
+  config = reconfigure("/beacon_follow", {{"follow_colour", "purple"}}, {});
+  EXPECT_EQ(strIn(config, "follow_colour"), "blue");
+
+  // Out of range: clamped to the .cfg bound.
+  config = reconfigure("/beacon_follow", {}, {{"turn_gain", 50.0}});
+  EXPECT_EQ(doubleIn(config, "turn_gain"), 10.0);
+
+  // Back to the defaults: green is followed again.
+  config = reconfigure("/beacon_follow", {{"follow_colour", "green"}, {"stop_colour", "red"}},
+                       {{"turn_gain", 1.5}});
+  EXPECT_EQ(strIn(config, "follow_colour"), "green");
+  geometry_msgs::Twist last;
+  for (int i = 0; i < 15; ++i) {
+    const auto replies = send(follow_, frame(green_ball));
+    ASSERT_EQ(replies.size(), 1u);
+    last = replies[0];
+  }
+  EXPECT_GT(last.linear.x, 0.05);
 }
 
 }  // namespace
