@@ -144,6 +144,7 @@ class NodeUnderTest:
 
     def __init__(self):
         self.port = free_port()
+        self.saved_master = os.environ.get("ROS_MASTER_URI")  # restored by close()
         os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{self.port}"
         self.roscore = subprocess.Popen(
             ["roscore", "-p", str(self.port)], stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
@@ -192,6 +193,10 @@ class NodeUnderTest:
         rospy.signal_shutdown("test done")
         stop(self.node)
         stop(self.roscore)
+        if self.saved_master is None:
+            os.environ.pop("ROS_MASTER_URI", None)
+        else:
+            os.environ["ROS_MASTER_URI"] = self.saved_master
 
 
 @pytest.fixture(scope="module")
