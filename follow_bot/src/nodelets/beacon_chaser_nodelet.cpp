@@ -2,16 +2,18 @@
 // stop 1 m in front of it", as one nodelet. One camera frame in, one Twist out.
 //
 // Thin wiring around ColourBlobDetector and BeaconController; CommandOutput adds limits, the
-// frame watchdog and the final stop.
+// frame watchdog and the final stop. Thresholds and gains are ~params, also live through
+// dynamic_reconfigure (cfg/BeaconChaser.cfg).
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <cv_bridge/cv_bridge.h>
+#include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -19,6 +21,7 @@
 #include <opencv2/imgproc.hpp>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "follow_bot/BeaconChaserConfig.h"
 #include "follow_bot/BeaconDetections.h"
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
@@ -31,63 +34,101 @@ namespace follow_bot {
 
 namespace {
 
-template <typename T>
-T param(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
-  T value = fallback;
-  pnh.param(name, value, fallback);
-  return value;
-}
-
-void throwIfError(const std::string& error) {
-  if (!error.empty()) throw std::invalid_argument(error);
-}
-
-// Every ~param, validated by the core's own checks; throws std::invalid_argument.
-std::pair<ColourBlobConfig, BeaconControllerConfig> readConfigs(const ros::NodeHandle& pnh) {
+// Everything dynamic_reconfigure can change, as core configurations.
+struct Settings {
   ColourBlobConfig detector;
-  const int sensitivity = param(pnh, "sensitivity", 15);
-  const int s_min = param(pnh, "s_min", 100);
-  // Low: a dark-green dumpster in dim light has V ~ 30; grey floor is rejected by s_min anyway.
-  const int v_min = param(pnh, "v_min", 20);
-  for (ColourSpec& colour : detector.colours) {
-    colour.sensitivity = sensitivity;
-    colour.s_min = s_min;
-    colour.v_min = v_min;
-  }
-  detector.min_area = param(pnh, "min_area", detector.min_area);
-  throwIfError(validate(detector));
-
   BeaconControllerConfig controller;
-  const std::string mode = param<std::string>(pnh, "mode", toString(controller.mode));
-  const std::optional<BeaconMode> parsed_mode = parseBeaconMode(mode);
-  if (!parsed_mode) {
+};
+
+// "~name must be red, green or blue, got 'x'" unless `colour` names a detectable colour.
+void requireColourName(const std::string& name, const std::string& colour) {
+  if (!parseColourName(colour)) {  // checked in every mode: a typo is a typo
+    throw std::invalid_argument("~" + name + " must be red, green or blue, got '" + colour + "'");
+  }
+}
+
+// The core configurations for `cfg`, on top of `base` for what only start-up sets (target
+// object, camera). Throws std::invalid_argument naming the first bad value; used for the ~params
+// at start-up and for every reconfiguration, so both are held to the same rules.
+Settings coreSettings(const BeaconChaserConfig& cfg, const BeaconControllerConfig& base) {
+  Settings settings;
+  ColourBlobConfig& detector = settings.detector;
+  for (ColourSpec& colour : detector.colours) {
+    colour.sensitivity = cfg.sensitivity;
+    colour.s_min = cfg.s_min;
+    colour.v_min = cfg.v_min;
+  }
+  detector.min_area = cfg.min_area;
+  if (const std::string error = validate(detector); !error.empty()) {
+    throw std::invalid_argument(error);
+  }
+
+  BeaconControllerConfig& controller = settings.controller;
+  controller = base;
+  const std::optional<BeaconMode> mode = parseBeaconMode(cfg.mode);
+  if (!mode) {
     throw std::invalid_argument("~mode must be 'follow_green_stop_red' or 'approach', got '" +
-                                mode + "'");
+                                cfg.mode + "'");
   }
-  controller.mode = *parsed_mode;
-  controller.target_colour = param(pnh, "target_colour", controller.target_colour);
-  if (!parseColourName(controller.target_colour)) {  // checked in every mode: a typo is a typo
-    throw std::invalid_argument("~target_colour must be red, green or blue, got '" +
-                                controller.target_colour + "'");
+  controller.mode = *mode;
+  requireColourName("follow_colour", cfg.follow_colour);
+  requireColourName("stop_colour", cfg.stop_colour);
+  requireColourName("target_colour", cfg.target_colour);
+  controller.follow_colour = cfg.follow_colour;
+  controller.stop_colour = cfg.stop_colour;
+  controller.target_colour = cfg.target_colour;
+  controller.close_area = cfg.close_area;
+  controller.stop_min_area = cfg.stop_min_area;
+  controller.stop_release_delay = cfg.stop_release_delay;
+  controller.approach_speed = cfg.approach_speed;
+  controller.turn_gain = cfg.turn_gain;
+  controller.stop_distance = cfg.stop_distance;
+  controller.max_speed = cfg.max_speed;
+  controller.k_range = cfg.k_range;
+  controller.k_bearing = cfg.k_bearing;
+  controller.max_turn_rate = cfg.max_turn_rate;
+  controller.search_rate = cfg.search_rate;
+  for (const std::string& error :
+       {validate(controller), checkColoursDetected(controller, detector)}) {
+    if (!error.empty()) throw std::invalid_argument(error);
   }
-  const std::string shape = param<std::string>(pnh, "target_shape", "box");
+
+  // dynamic_reconfigure clamps live updates to the .cfg ranges, but ~params read at start-up
+  // are not clamped.
+  BeaconChaserConfig clamped = cfg;
+  clamped.__clamp__();
+  for (const auto& param : BeaconChaserConfig::__getParamDescriptions__()) {
+    uint32_t changed = 0;  // every parameter has level 1: non-zero when clamping changed it
+    param->calcLevel(changed, cfg, clamped);
+    if (changed != 0) {
+      throw std::invalid_argument("~" + param->name + " is outside its range (" +
+                                  param->description + "; ranges in README.md)");
+    }
+  }
+  return settings;
+}
+
+// What only start-up sets: the target object and the camera mounting (intrinsics arrive with
+// camera_info). Throws std::invalid_argument naming the first bad value.
+BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
+  BeaconControllerConfig controller;
+  std::string shape = "box";
+  pnh.param<std::string>("target_shape", shape, shape);
   const std::optional<BeaconShape> parsed_shape = parseBeaconShape(shape);
   if (!parsed_shape) {
     throw std::invalid_argument("~target_shape must be 'box' or 'sphere', got '" + shape + "'");
   }
   controller.target.shape = *parsed_shape;
-  controller.target.size_m = param(pnh, "target_size", controller.target.size_m);
-  controller.stop_distance = param(pnh, "stop_distance", controller.stop_distance);
-  controller.max_speed = param(pnh, "max_speed", controller.max_speed);
-  controller.approach_speed = param(pnh, "approach_speed", controller.approach_speed);
-  controller.search_rate = param(pnh, "search_rate", controller.search_rate);
-  controller.close_area = param(pnh, "close_area", controller.close_area);
-  controller.camera.height_m = param(pnh, "camera_height", controller.camera.height_m);
-  controller.camera.pitch_rad = param(pnh, "camera_pitch_deg", 0.0) * M_PI / 180.0;
-  controller.camera.x_offset_m = param(pnh, "camera_x_offset", controller.camera.x_offset_m);
-  throwIfError(validate(controller));
-  throwIfError(checkColoursDetected(controller, detector));
-  return {detector, controller};
+  controller.target.size_m = positiveParam(pnh, "target_size", controller.target.size_m);
+  controller.camera.height_m = positiveParam(pnh, "camera_height", controller.camera.height_m);
+  const double pitch_deg = checkedParam(
+      pnh, "camera_pitch_deg", 0.0, [](double v) { return std::isfinite(v) && std::abs(v) < 89.0; },
+      "within (-89, 89)");
+  controller.camera.pitch_rad = pitch_deg * M_PI / 180.0;
+  controller.camera.x_offset_m = checkedParam(
+      pnh, "camera_x_offset", controller.camera.x_offset_m,
+      [](double v) { return std::isfinite(v); }, "finite");
+  return controller;
 }
 
 }  // namespace
@@ -97,40 +138,63 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
   void onInit() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    const auto [detector, controller] = readConfigs(pnh);  // throws on bad ~params
-    detector_ = std::make_unique<ColourBlobDetector>(detector);
-    controller_config_ = controller;
-    controller_ = std::make_unique<BeaconController>(controller);
+    BeaconChaserConfig cfg = BeaconChaserConfig::__getDefault__();
+    cfg.__fromServer__(pnh);
+    apply(coreSettings(cfg, readStartupConfig(pnh)), cfg);  // throws on bad ~params
     output_ = std::make_unique<CommandOutput>(nh, pnh);
 
     detections_pub_ = pnh.advertise<BeaconDetections>("detections", 1);
-    for (const ColourSpec& colour : detector.colours) {  // Lab 5 step 3: one flag per colour
+    for (const ColourSpec& colour : settings_.detector.colours) {  // Lab 5 step 3: one flag each
       found_pubs_.push_back(pnh.advertise<std_msgs::Bool>(colour.name + "_found", 1));
     }
     image_transport::ImageTransport private_transport(pnh);
     debug_pub_ = private_transport.advertise("debug_image", 1);
     camera_info_sub_ = nh.subscribe("camera_info", 1, &BeaconChaserNodelet::onCameraInfo, this);
+
+    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<BeaconChaserConfig>>(mutex_, pnh);
+    reconfigure_->setCallback(
+        [this](BeaconChaserConfig& config, uint32_t) { reconfigure(config); });
+
     image_transport::ImageTransport transport(nh);
     image_sub_ = transport.subscribe("image", 1, &BeaconChaserNodelet::onImage, this);
   }
 
+  // Called with mutex_ held by the dynamic_reconfigure server. A combination the core rejects
+  // changes nothing, and the server then reports the settings still in force.
+  void reconfigure(BeaconChaserConfig& config) {
+    try {
+      apply(coreSettings(config, settings_.controller), config);
+    } catch (const std::invalid_argument& error) {
+      NODELET_WARN("rejected reconfiguration, keeping the previous settings: %s", error.what());
+      config = applied_config_;
+    }
+  }
+
+  // New settings start with fresh controller state (a new mode must not inherit the old one's).
+  void apply(const Settings& settings, const BeaconChaserConfig& config) {
+    settings_ = settings;
+    applied_config_ = config;
+    detector_ = std::make_unique<ColourBlobDetector>(settings.detector);
+    controller_ = std::make_unique<BeaconController>(settings.controller);
+  }
+
   // Ranges need the intrinsics; the controller is rebuilt when they change.
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<boost::recursive_mutex> lock(mutex_);
     bool changed = false;
-    const std::string error = updateIntrinsics(*info, controller_config_.camera, changed);
+    const std::string error = updateIntrinsics(*info, settings_.controller.camera, changed);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
       return;
     }
     if (changed || !has_intrinsics_) {
-      controller_ = std::make_unique<BeaconController>(controller_config_);
       has_intrinsics_ = true;
+      apply(settings_, applied_config_);
     }
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<boost::recursive_mutex> lock(mutex_);
     std::string error;
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
     if (!frame) {
@@ -141,7 +205,7 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
     const BlobResult blobs = detector_->detect(frame->image);
     const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
     Twist2D desired;
-    if (controller_config_.mode == BeaconMode::kApproach && !has_intrinsics_) {
+    if (settings_.controller.mode == BeaconMode::kApproach && !has_intrinsics_) {
       NODELET_WARN_THROTTLE(2.0, "approach needs camera_info on %s for ranges: holding still",
                             camera_info_sub_.getTopic().c_str());
     } else {
@@ -171,7 +235,7 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
       detection.centroid_y = blob.centroid.y;
       detection.radius = blob.circle_radius;
       detection.range = std::numeric_limits<float>::quiet_NaN();
-      if (blob.name == controller_config_.target_colour && controller_->lastRange()) {
+      if (blob.name == settings_.controller.target_colour && controller_->lastRange()) {
         detection.range = *controller_->lastRange();
       }
       out.detections.push_back(detection);
@@ -196,12 +260,14 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
     debug_pub_.publish(debug.toImageMsg());
   }
 
-  std::mutex mutex_;
+  boost::recursive_mutex mutex_;  // the type dynamic_reconfigure::Server shares
   std::unique_ptr<ColourBlobDetector> detector_;
-  BeaconControllerConfig controller_config_;
   std::unique_ptr<BeaconController> controller_;
+  Settings settings_;
+  BeaconChaserConfig applied_config_;  // what the server reports after a rejected update
   bool has_intrinsics_ = false;
   std::unique_ptr<CommandOutput> output_;
+  std::unique_ptr<dynamic_reconfigure::Server<BeaconChaserConfig>> reconfigure_;
   ros::Publisher detections_pub_;
   std::vector<ros::Publisher> found_pubs_;
   image_transport::Publisher debug_pub_;

@@ -1,0 +1,327 @@
+// rostest: the beacon chaser through its topics (wall time, no simulator), fed bad input.
+#include <cv_bridge/cv_bridge.h>
+#include <dynamic_reconfigure/Reconfigure.h>
+#include <geometry_msgs/Twist.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <opencv2/imgproc.hpp>
+
+namespace {
+
+const cv::Scalar kFloor(120, 120, 120);
+const cv::Scalar kGreen(0, 200, 0);  // BGR, as the rgb world's balls
+const cv::Scalar kRed(0, 0, 230);
+
+// Grey floor with a ball of `colour` (BGR) centred at `centre`.
+cv::Mat floorWithBall(const cv::Scalar& colour, cv::Point centre = {400, 260}, int radius = 40) {
+  cv::Mat bgr(480, 640, CV_8UC3, kFloor);
+  cv::circle(bgr, centre, radius, colour, cv::FILLED, cv::LINE_AA);
+  return bgr;
+}
+
+bool isZero(const geometry_msgs::Twist& t) { return t.linear.x == 0.0 && t.angular.z == 0.0; }
+
+// Finite, within the default CommandOutput limits, planar.
+bool sane(const geometry_msgs::Twist& t) {
+  return std::isfinite(t.linear.x) && std::isfinite(t.angular.z) && std::abs(t.linear.x) <= 0.7 &&
+         std::abs(t.angular.z) <= M_PI && t.linear.y == 0 && t.linear.z == 0 && t.angular.x == 0 &&
+         t.angular.y == 0;
+}
+
+// One beacon_chaser instance under its own topic prefix (see beacon_chaser_node.test).
+struct Chaser {
+  Chaser(ros::NodeHandle& nh, const std::string& prefix, std::vector<geometry_msgs::Twist>* sink)
+      : images(nh.advertise<sensor_msgs::Image>(prefix + "/image", 10)),
+        camera_info(nh.advertise<sensor_msgs::CameraInfo>(prefix + "/camera_info", 1)),
+        commands(nh.subscribe<geometry_msgs::Twist>(
+            prefix + "/cmd_vel", 100,
+            boost::function<void(const geometry_msgs::TwistConstPtr&)>(
+                [sink](const geometry_msgs::TwistConstPtr& msg) { sink->push_back(*msg); }))) {}
+  bool connected() const {
+    return images.getNumSubscribers() > 0 && commands.getNumPublishers() > 0;
+  }
+
+  ros::Publisher images;
+  ros::Publisher camera_info;
+  ros::Subscriber commands;
+};
+
+class BeaconChaserNode : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    log_ = nh_.subscribe("/rosout", 100, &BeaconChaserNode::onLog, this);
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(20.0);
+    while (!(follow_.connected() && approach_.connected()) && ros::WallTime::now() < deadline) {
+      ros::WallDuration(0.01).sleep();
+    }
+    ASSERT_TRUE(follow_.connected()) << "beacon_follow never connected";
+    ASSERT_TRUE(approach_.connected()) << "beacon_approach never connected";
+  }
+
+  void onLog(const rosgraph_msgs::LogConstPtr& msg) { logs_.push_back(*msg); }
+
+  // Spins for `wait` wall seconds and returns the commands received so far.
+  std::vector<geometry_msgs::Twist> spinFor(double wait) {
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait);
+    while (ros::WallTime::now() < deadline) {
+      ros::spinOnce();
+      ros::WallDuration(0.002).sleep();
+    }
+    return received_;
+  }
+
+  // Publishes a frame to `chaser` and collects its answers within `wait` seconds.
+  std::vector<geometry_msgs::Twist> send(Chaser& chaser, const sensor_msgs::Image& msg,
+                                         double wait = 0.1) {
+    received_.clear();
+    chaser.images.publish(msg);
+    return spinFor(wait);
+  }
+
+  sensor_msgs::Image frame(const cv::Mat& bgr) {
+    std_msgs::Header header;
+    stamp_ += ros::Duration(1.0 / 30.0);
+    header.stamp = stamp_;
+    header.frame_id = "camera_rgb_optical_frame";
+    return *cv_bridge::CvImage(header, "bgr8", bgr).toImageMsg();
+  }
+
+  // rosout lines from `node` (e.g. "/beacon_approach") at WARN or above that contain `words`.
+  int logsFrom(const std::string& node, const std::string& words) const {
+    int count = 0;
+    for (const rosgraph_msgs::Log& log : logs_) {
+      if (log.name == node && log.level >= rosgraph_msgs::Log::WARN &&
+          log.msg.find(words) != std::string::npos) {
+        ++count;
+      }
+    }
+    return count;
+  }
+
+  ros::NodeHandle nh_;
+  std::vector<geometry_msgs::Twist> received_;
+  Chaser follow_{nh_, "/follow", &received_};
+  Chaser approach_{nh_, "/approach", &received_};
+  ros::Subscriber log_;
+  std::vector<rosgraph_msgs::Log> logs_;
+  ros::Time stamp_{1000.0};
+};
+
+TEST_F(BeaconChaserNode, MalformedFramesAreDroppedAndEveryGoodFrameGetsOneTwist) {
+  const sensor_msgs::Image good = frame(floorWithBall(kGreen));
+  std::vector<sensor_msgs::Image> bad(6, good);
+  bad[0].encoding = "bayer_rggb8";  // unknown to the node's BGR view
+  bad[1].encoding = "32FC1";
+  bad[2].step = good.width * 3 - 1;          // wrong step
+  bad[3].data.resize(good.data.size() / 2);  // truncated data
+  bad[4].width = 0;                          // empty image
+  bad[4].height = 0;
+  bad[4].step = 0;
+  bad[4].data.clear();
+  bad[5].height = 0xFFFFFFFFu;
+  for (std::size_t i = 0; i < bad.size(); ++i) {
+    for (const auto& reply : send(follow_, bad[i])) {
+      EXPECT_TRUE(isZero(reply)) << "bad frame " << i << ": only the watchdog's stop may answer";
+    }
+    // The good frame's answer comes last; the watchdog's one stop may precede it, since bad
+    // frames do not count as frames.
+    const auto replies = send(follow_, frame(floorWithBall(kGreen)), 0.2);
+    ASSERT_GE(replies.size(), 1u) << "no answer to the good frame after bad frame " << i;
+    ASSERT_LE(replies.size(), 2u);
+    if (replies.size() == 2) EXPECT_TRUE(isZero(replies[0]));
+    EXPECT_TRUE(sane(replies.back()));
+  }
+  EXPECT_GE(logsFrom("/beacon_follow", "dropping frame"), 1);
+}
+
+TEST_F(BeaconChaserNode, FramesWithoutBeaconsGetOneSearchTwistEach) {
+  const cv::Mat grey(480, 640, CV_8UC3, kFloor);
+  const cv::Mat tiny(8, 12, CV_8UC3, kFloor);
+  for (const cv::Mat* image : {&grey, &tiny}) {
+    for (int i = 0; i < 5; ++i) {
+      const auto replies = send(follow_, frame(*image));
+      ASSERT_EQ(replies.size(), 1u);
+      EXPECT_TRUE(sane(replies[0]));
+      EXPECT_EQ(replies[0].linear.x, 0.0) << "searching spins in place";
+    }
+  }
+}
+
+TEST_F(BeaconChaserNode, AllRedStopsWithinAThirdOfASecondAndStaysStopped) {
+  geometry_msgs::Twist moving;
+  for (int i = 0; i < 15; ++i) {
+    const auto replies = send(follow_, frame(floorWithBall(kGreen)));
+    ASSERT_EQ(replies.size(), 1u);
+    moving = replies[0];
+  }
+  ASSERT_GT(moving.linear.x, 0.05) << "a small green ball ahead: drive toward it";
+  const cv::Mat red(480, 640, CV_8UC3, kRed);
+  for (int i = 0; i < 30; ++i) {  // 1 s of frames at 30 Hz
+    const auto replies = send(follow_, frame(red));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(sane(replies[0]));
+    if (i >= 9) EXPECT_TRUE(isZero(replies[0])) << "frame " << i << " after red filled the view";
+  }
+}
+
+TEST_F(BeaconChaserNode, AllGreenGivesASaneCommand) {
+  const cv::Mat green(480, 640, CV_8UC3, kGreen);
+  for (int i = 0; i < 10; ++i) {
+    const auto replies = send(follow_, frame(green));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(sane(replies[0]));
+  }
+}
+
+TEST_F(BeaconChaserNode, StopsWithinAFifthOfASecondWhenFramesStop) {
+  for (int i = 0; i < 10; ++i) send(follow_, frame(floorWithBall(kGreen)), 0.03);
+  received_.clear();
+  const ros::WallTime last_frame = ros::WallTime::now();
+  ros::WallTime first_stop;
+  const ros::WallTime deadline = last_frame + ros::WallDuration(1.0);
+  while (ros::WallTime::now() < deadline) {
+    ros::spinOnce();
+    if (first_stop.isZero() && !received_.empty()) first_stop = ros::WallTime::now();
+    ros::WallDuration(0.002).sleep();
+  }
+  ASSERT_EQ(received_.size(), 1u) << "expected exactly one stop command";
+  EXPECT_TRUE(isZero(received_[0]));
+  EXPECT_LE((first_stop - last_frame).toSec(), 0.2);
+}
+
+// Approach mode needs intrinsics for ranges: without usable camera_info it holds still and says
+// so (throttled); valid camera_info gets it moving.
+TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
+  const cv::Mat ball = floorWithBall(kGreen, {330, 250});
+  for (int i = 0; i < 30; ++i) {  // ~3 s of wall time: the warning is throttled to one per 2 s
+    const auto replies = send(approach_, frame(ball));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(isZero(replies[0])) << "no camera_info yet, frame " << i;
+  }
+  const int warnings = logsFrom("/beacon_approach", "camera_info");
+  EXPECT_GE(warnings, 1) << "holding still must be explained";
+  EXPECT_LE(warnings, 2) << "the explanation is throttled, not one per frame";
+
+  sensor_msgs::CameraInfo zeros;  // all-zero K: unusable
+  zeros.width = 640;
+  zeros.height = 480;
+  for (int i = 0; i < 10; ++i) {
+    approach_.camera_info.publish(zeros);
+    const auto replies = send(approach_, frame(ball));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(isZero(replies[0])) << "all-zero camera_info, frame " << i;
+  }
+  EXPECT_GE(logsFrom("/beacon_approach", "ignoring camera_info"), 1);
+
+  sensor_msgs::CameraInfo valid = zeros;  // the harness camera: 640x480, 60 deg field of view
+  const double f = 320.0 / std::tan(M_PI / 6.0);
+  valid.K = {f, 0.0, 320.0, 0.0, f, 240.0, 0.0, 0.0, 1.0};
+  double max_linear = 0.0;
+  for (int i = 0; i < 15; ++i) {
+    approach_.camera_info.publish(valid);
+    const auto replies = send(approach_, frame(ball));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(sane(replies[0]));
+    max_linear = std::max(max_linear, replies[0].linear.x);
+  }
+  EXPECT_GT(max_linear, 0.05) << "with intrinsics the ball is ranged and approached";
+}
+
+// Sends one dynamic_reconfigure update (string and double parameters) to `node` and returns
+// the configuration its server reports back.
+dynamic_reconfigure::Config reconfigure(
+    const std::string& node, const std::vector<std::pair<std::string, std::string>>& strs,
+    const std::vector<std::pair<std::string, double>>& doubles) {
+  dynamic_reconfigure::Reconfigure call;
+  for (const auto& [name, value] : strs) {
+    dynamic_reconfigure::StrParameter param;
+    param.name = name;
+    param.value = value;
+    call.request.config.strs.push_back(param);
+  }
+  for (const auto& [name, value] : doubles) {
+    dynamic_reconfigure::DoubleParameter param;
+    param.name = name;
+    param.value = value;
+    call.request.config.doubles.push_back(param);
+  }
+  EXPECT_TRUE(ros::service::call(node + "/set_parameters", call));
+  return call.response.config;
+}
+
+std::string strIn(const dynamic_reconfigure::Config& config, const std::string& name) {
+  for (const auto& param : config.strs) {
+    if (param.name == name) return param.value;
+  }
+  return "<missing>";
+}
+
+double doubleIn(const dynamic_reconfigure::Config& config, const std::string& name) {
+  for (const auto& param : config.doubles) {
+    if (param.name == name) return param.value;
+  }
+  return std::nan("");
+}
+
+// Live updates: applied whole, clamped to the .cfg ranges, or refused whole when the core
+// rejects the combination (the server then reports the settings still in force).
+TEST_F(BeaconChaserNode, ReconfigureAppliesClampsOrRefusesWhole) {
+  ASSERT_TRUE(ros::service::waitForService("/beacon_follow/set_parameters", 10000));
+  const cv::Mat green_ball = floorWithBall(kGreen);
+
+  // Swap the roles: green now stops the robot.
+  auto config =
+      reconfigure("/beacon_follow", {{"follow_colour", "blue"}, {"stop_colour", "green"}}, {});
+  EXPECT_EQ(strIn(config, "follow_colour"), "blue");
+  EXPECT_EQ(strIn(config, "stop_colour"), "green");
+  for (int i = 0; i < 5; ++i) {
+    const auto replies = send(follow_, frame(green_ball));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(isZero(replies[0])) << "green is the stop colour now";
+  }
+
+  // Equal follow and stop colours, together with a valid gain: nothing of it is applied.
+  config = reconfigure("/beacon_follow", {{"follow_colour", "green"}}, {{"turn_gain", 2.5}});
+  EXPECT_EQ(strIn(config, "follow_colour"), "blue");
+  EXPECT_EQ(doubleIn(config, "turn_gain"), 1.5);
+  spinFor(0.5);  // rosout is asynchronous
+  EXPECT_GE(logsFrom("/beacon_follow", "rejected reconfiguration"), 1);
+
+  // An unknown colour name is refused the same way.
+  config = reconfigure("/beacon_follow", {{"follow_colour", "purple"}}, {});
+  EXPECT_EQ(strIn(config, "follow_colour"), "blue");
+
+  // Out of range: clamped to the .cfg bound.
+  config = reconfigure("/beacon_follow", {}, {{"turn_gain", 50.0}});
+  EXPECT_EQ(doubleIn(config, "turn_gain"), 10.0);
+
+  // Back to the defaults: green is followed again.
+  config = reconfigure("/beacon_follow", {{"follow_colour", "green"}, {"stop_colour", "red"}},
+                       {{"turn_gain", 1.5}});
+  EXPECT_EQ(strIn(config, "follow_colour"), "green");
+  geometry_msgs::Twist last;
+  for (int i = 0; i < 15; ++i) {
+    const auto replies = send(follow_, frame(green_ball));
+    ASSERT_EQ(replies.size(), 1u);
+    last = replies[0];
+  }
+  EXPECT_GT(last.linear.x, 0.05);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "beacon_chaser_node_test");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
