@@ -8,8 +8,8 @@
 // (make bench measures both on the same frames).
 //
 // Pose: OpenCV's IPPE for a square gives both local minima of the planar pose problem (the tilt
-// ambiguity; Debian's libapriltag does not export its orthogonal-iteration solver), each refined
-// by Levenberg-Marquardt on the corners. The one with the smaller reprojection residual wins;
+// ambiguity; Debian's libapriltag does not export its orthogonal-iteration solver). The one with
+// the smaller reprojection residual wins, then Gauss-Newton refines it on the corners;
 // when the two residuals are within `ambiguity_ratio` of each other or both below corner noise
 // (`ambiguity_px`: a far, face-on tag, where tilt is unobservable) the one closer in rotation to
 // the previous frame's pose is kept, so the pose never flips sign from frame to frame.
