@@ -30,6 +30,7 @@
 #include "follow_bot/ros/camera_input.h"
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
+#include "follow_bot/ros/params.h"
 #include "follow_bot/tag_detector.h"
 #if __has_include("follow_bot/sign_detector.h")
 #include "follow_bot/sign_detector.h"
@@ -56,7 +57,7 @@ std::unique_ptr<MarkerDetector> makeDetector(const ros::NodeHandle& pnh, std::st
     TagDetectorConfig config;
     config.family = param(pnh, "tag_family", config.family);
     config.id = param(pnh, "tag_id", config.id);
-    config.size_m = param(pnh, "tag_size", config.size_m);
+    config.size_m = positiveParam(pnh, "tag_size", config.size_m);
     config.quad_decimate = param(pnh, "quad_decimate", config.quad_decimate);
     config.min_decision_margin = param(pnh, "min_decision_margin", config.min_decision_margin);
     config.max_hamming = param(pnh, "max_hamming", config.max_hamming);
@@ -80,7 +81,7 @@ std::unique_ptr<MarkerDetector> makeDetector(const ros::NodeHandle& pnh, std::st
 
 ParkingServoConfig readServoConfig(const ros::NodeHandle& pnh) {
   ParkingServoConfig config;
-  config.standoff_m = param(pnh, "standoff", config.standoff_m);
+  config.standoff_m = positiveParam(pnh, "standoff", config.standoff_m);
   config.gain = param(pnh, "gain", config.gain);
   config.steer_gain = param(pnh, "steer_gain", config.steer_gain);
   config.max_bearing_rad = param(pnh, "max_bearing_deg", 20.0) * kDegToRad;
