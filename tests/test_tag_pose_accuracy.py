@@ -94,7 +94,8 @@ def test_pose_within_1cm_and_1deg_where_observable(parking, tmp_path):
     world, renderer, tag = parking
     robots = [view(tag, *v) for v in VIEWS]
     failures = []
-    for v, robot, (r, t) in zip(VIEWS, robots, probe(renderer, robots, tmp_path, tag.size), strict=False):
+    poses = probe(renderer, robots, tmp_path, tag.size)
+    for v, robot, (r, t) in zip(VIEWS, robots, poses, strict=True):
         r_true, t_true = expected_pose(renderer.camera, robot, tag)
         position = float(np.linalg.norm(t - t_true))
         angle = rotation_error_deg(r, r_true)
@@ -110,7 +111,7 @@ def test_sweep_out_to_3m_never_flips(parking, tmp_path, incidence_deg, far_bound
     distances = np.arange(0.5, 3.001, 0.1)
     robots = [view(tag, d, incidence_deg, 0.0) for d in distances]
     errors = []
-    for robot, (r, _) in zip(robots, probe(renderer, robots, tmp_path, tag.size), strict=False):
+    for robot, (r, _) in zip(robots, probe(renderer, robots, tmp_path, tag.size), strict=True):
         r_true, _ = expected_pose(renderer.camera, robot, tag)
         errors.append(tilt_deg(r) - tilt_deg(r_true))
     errors = np.array(errors)
