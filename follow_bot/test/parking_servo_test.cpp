@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <optional>
 
 #include <gtest/gtest.h>
@@ -74,10 +73,6 @@ DriveResult drive(Pose2D pose, double seconds, double hide_from = -1, double hid
     const Twist2D command = limiter.limit(servo.update(marker, t), kDt);
     run.max_abs_v = std::max(run.max_abs_v, std::abs(command.linear));
     if (servo.state() == ParkingState::kParked && run.parked_at < 0) run.parked_at = t;
-    if (std::getenv("PARKING_TRACE")) {
-      std::printf("%.2f %s x %.3f y %.3f yaw %.1f v %.3f w %.3f\n", t, toString(servo.state()),
-                  pose.x, pose.y, pose.yaw * 180 / kPi, command.linear, command.angular);
-    }
     pose.x += command.linear * std::cos(pose.yaw) * kDt;
     pose.y += command.linear * std::sin(pose.yaw) * kDt;
     pose.yaw += command.angular * kDt;
