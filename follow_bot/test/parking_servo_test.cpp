@@ -57,22 +57,25 @@ struct DriveResult {
   double parked_at = -1;
   int flips = 0;
   double max_abs_v = 0;
+  int lost_frames = 0;  // frames in state lost (the marker out of view after being seen)
 };
 
 DriveResult drive(Pose2D pose, double seconds, double hide_from = -1, double hide_to = -1) {
   ParkingServoConfig config;
   config.camera.pitch_rad = 0.0;
   ParkingServo servo(config);
+  const CameraGeometry& camera = config.camera;
   VelocityLimiterConfig limits;
   limits.allow_reverse = true;
   VelocityLimiter limiter(limits);
   DriveResult run;
   for (double t = 0; t < seconds; t += kDt) {
-    std::optional<MarkerObservation> marker = observe(pose, config.camera);
+    std::optional<MarkerObservation> marker = observe(pose, camera);
     if (t >= hide_from && t < hide_to) marker.reset();
     const Twist2D command = limiter.limit(servo.update(marker, t), kDt);
     run.max_abs_v = std::max(run.max_abs_v, std::abs(command.linear));
     if (servo.state() == ParkingState::kParked && run.parked_at < 0) run.parked_at = t;
+    if (servo.state() == ParkingState::kLost) ++run.lost_frames;
     pose.x += command.linear * std::cos(pose.yaw) * kDt;
     pose.y += command.linear * std::sin(pose.yaw) * kDt;
     pose.yaw += command.angular * kDt;
@@ -99,6 +102,7 @@ TEST_P(ParkingFromStart, ParksSquareWithinTolerance) {
   const DriveResult run = drive(startPose(GetParam()), 25.0);
   const Pose2D& p = run.final_pose;
   EXPECT_GT(run.parked_at, 0.0);
+  EXPECT_EQ(run.lost_frames, 0);  // the servo keeps the marker in view
   EXPECT_NEAR(p.x, 0.5, 0.005);
   EXPECT_NEAR(p.y, 0.0, 0.005);
   EXPECT_NEAR(std::remainder(p.yaw - kPi, 2 * kPi) * 180 / kPi, 0.0, 0.6);
@@ -154,6 +158,26 @@ TEST(ParkingServo, ParkingErrorOfASquareView) {
   EXPECT_NEAR(error.lateral, 0.1, 1e-9);
   EXPECT_NEAR(error.heading, 0.0, 1e-9);
   EXPECT_NEAR(error.bearing, std::atan2(0.1, 0.7), 1e-9);  // marker to the robot's left
+}
+
+TEST(ParkingServo, KeepsTheMarkerInsideTheViewCameraInfoReports) {
+  // 1 m from the marker, 10 deg off its normal, the marker 10 deg right of the heading. With the
+  // 60 deg lens the servo swings further (b* = -15.5 deg, clamped by the view): it turns left.
+  // Told by setIntrinsics (as the node does from CameraInfo) of a 42 deg lens, that would push
+  // the marker out of view: it turns right to hold it at -6.5 deg instead.
+  const Pose2D robot = startPose({1.0, 10, -10});
+  ParkingServoConfig config;
+  config.camera.pitch_rad = 0.0;
+  ParkingServo wide(config);
+  EXPECT_GT(wide.update(observe(robot, config.camera), 0.0).angular, 0.0);
+
+  CameraGeometry narrow = config.camera;
+  narrow.fx = narrow.fy = 1.5 * config.camera.fx;
+  ParkingServo servo(config);
+  servo.setIntrinsics(narrow);
+  EXPECT_DOUBLE_EQ(servo.config().camera.fx, narrow.fx);
+  EXPECT_DOUBLE_EQ(servo.config().camera.height_m, config.camera.height_m);  // mounting kept
+  EXPECT_LT(servo.update(observe(robot, narrow), 0.0).angular, 0.0);
 }
 
 TEST(ParkingServo, RejectsBadConfig) {

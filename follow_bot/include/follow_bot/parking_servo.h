@@ -77,6 +77,9 @@ class ParkingServo {
   // limiter).
   Twist2D update(const std::optional<MarkerObservation>& marker, double time_s);
 
+  // Takes the intrinsics (fx, fy, cx, cy) of `camera`, as from CameraInfo; the mounting stays.
+  void setIntrinsics(const CameraGeometry& camera);
+
   ParkingState state() const { return state_; }
   const std::optional<ParkingError>& lastError() const { return last_error_; }
   const ParkingServoConfig& config() const { return config_; }

@@ -146,6 +146,13 @@ ParkingServo::ParkingServo(const ParkingServoConfig& config)
 
 ParkingServo::~ParkingServo() = default;
 
+void ParkingServo::setIntrinsics(const CameraGeometry& camera) {
+  config_.camera.fx = camera.fx;
+  config_.camera.fy = camera.fy;
+  config_.camera.cx = camera.cx;
+  config_.camera.cy = camera.cy;
+}
+
 bool ParkingServo::withinTolerance(const ParkingError& error, double scale) const {
   return std::abs(error.along - config_.standoff_m) <= scale * config_.position_tolerance &&
          std::abs(error.lateral) <= scale * config_.lateral_tolerance &&

@@ -129,12 +129,13 @@ class ParkerNodelet : public nodelet::Nodelet {
 
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
     std::lock_guard<std::mutex> lock(mutex_);
-    bool changed = false;
+    bool changed = false;  // the intrinsics are copied on every message either way
     const std::string error = updateIntrinsics(*info, camera_, changed);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
       return;
     }
+    servo_->setIntrinsics(camera_);  // it keeps the marker inside this camera's view
     has_intrinsics_ = true;
   }
 
