@@ -1,6 +1,6 @@
 """The behaviours in the closed loop, each judged by its scenario's own criteria.
 
-Every follower_*, dumpster_* and beacons_* scenario in worlds/scenarios is played by
+Every follower_*, dumpster_*, beacons_* and parker_* scenario in worlds/scenarios is played by
 run_scenario (its own roscore, the behaviour's launch file, the simulator in lockstep); the test
 reads result.json and fails with every unmet criterion listed.
 """
@@ -14,7 +14,7 @@ import pytest
 SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 SCENARIOS = sorted(
     path
-    for pattern in ("follower_*.yaml", "dumpster_*.yaml", "beacons_*.yaml")
+    for pattern in ("follower_*.yaml", "dumpster_*.yaml", "beacons_*.yaml", "parker_*.yaml")
     for path in SCENARIO_DIR.glob(pattern)
 )
 

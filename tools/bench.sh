@@ -4,6 +4,8 @@ set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 echo "== follower line detector vs the lecture's algorithm (same frames, one thread)"
 "$repo/build/devel/lib/follow_bot/line_detector_bench"
+echo "== parker tag detection + pose vs a bare ViSP vpDetectorAprilTag::detect (same frames, one thread)"
+"$repo/build/devel/lib/follow_bot/tag_detector_bench"
 echo "== harness"
 "$repo/harness/scripts/run_python" harness.bench
 echo "== follower image -> cmd_vel latency, across processes and between nodelets (probe nodelet)"

@@ -9,8 +9,9 @@
 namespace follow_bot {
 
 namespace {
-VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh) {
+VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse) {
   VelocityLimiterConfig config;
+  config.allow_reverse = allow_reverse;
   config.max_linear = positiveParam(pnh, "limit_linear", config.max_linear);
   config.max_angular = positiveParam(pnh, "limit_angular", config.max_angular);
   config.max_linear_accel = positiveParam(pnh, "limit_linear_accel", config.max_linear_accel);
@@ -19,8 +20,9 @@ VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh) {
 }
 }  // namespace
 
-CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh)
-    : limiter_(readLimits(pnh)), watchdog_(positiveParam(pnh, "watchdog_timeout", 0.15)) {
+CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse)
+    : limiter_(readLimits(pnh, allow_reverse)),
+      watchdog_(positiveParam(pnh, "watchdog_timeout", 0.15)) {
   publisher_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
   // Four checks per timeout bound the stop delay to 1.25 timeouts (on sim or wall time).
   timer_ =

@@ -452,11 +452,14 @@ class Renderer:
             return _BoxItem(obj.size, obj.pose, obj.colour, self.gain, self._light, ambient)
         return _MarkerItem(obj, self.gain, self._light, ambient)
 
-    def render(self, pose: Pose, frame: int | None = None) -> np.ndarray:
+    def render(
+        self, pose: Pose, frame: int | None = None, hidden: frozenset[str] | set[str] = frozenset()
+    ) -> np.ndarray:
         """Return a (height, width, 3) uint8 BGR image seen from robot pose (x, y, yaw).
 
         Noise (if sigma > 0) is drawn from an RNG keyed by (seed, frame); `frame` defaults
-        to an internal counter that advances on every call.
+        to an internal counter that advances on every call. Objects named in `hidden` are left
+        out (their baked floor shadows stay).
         """
         cam = self.camera
         if frame is None:
@@ -480,7 +483,8 @@ class Renderer:
             view = _View(cam, pose, self._light)
             dist = [float(np.linalg.norm(it.anchor - view.position)) for it in self._items]
             for i in np.argsort(dist)[::-1]:
-                self._items[i].draw(image, view)
+                if self.world.objects[i].name not in hidden:
+                    self._items[i].draw(image, view)
         if self.noise_sigma > 0.0:
             rng = np.random.default_rng((self.seed, frame))
             codes = np.frombuffer(rng.bytes(image.size * 2), np.uint16).reshape(image.shape)

@@ -133,8 +133,21 @@ def _parse_gaps(value: Any, where: str) -> tuple[tuple[float, float], ...]:
     return tuple(vector(2, number(ge=0.0))(item, f"{where}[{i}]") for i, item in enumerate(items))
 
 
+def _parse_hidden(value: Any, where: str) -> tuple[tuple[str, float, float], ...]:
+    out = []
+    for i, item in enumerate(sequence(value, where)):
+        if not isinstance(item, list) or len(item) != 3:
+            raise ScenarioError(f"{where}[{i}]: must be [object_name, start, end], got {item!r}")
+        name = string(item[0], f"{where}[{i}][0]")
+        start, end = vector(2, number(ge=0.0))(item[1:], f"{where}[{i}]")
+        if end <= start:
+            raise ScenarioError(f"{where}[{i}]: end must be after start, got {item!r}")
+        out.append((name, start, end))
+    return tuple(out)
+
+
 def _parse_perturbations(value: Any, where: str) -> Perturbations:
-    f = Fields(value, where, {"gain", "noise_sigma", "delay_steps", "dropout", "line_gap"})
+    f = Fields(value, where, {"gain", "noise_sigma", "delay_steps", "dropout", "line_gap", "hide"})
     delay = f.get("delay_steps", number(ge=0.0), None)
     if delay is not None and delay != int(delay):
         raise ScenarioError(f"{f.where('delay_steps')}: must be a whole number, got {delay!r}")
@@ -144,6 +157,7 @@ def _parse_perturbations(value: Any, where: str) -> Perturbations:
         delay_steps=None if delay is None else int(delay),
         dropouts=f.get("dropout", _parse_dropouts, ()),
         line_gaps=f.get("line_gap", _parse_gaps, ()),
+        hidden=f.get("hide", _parse_hidden, ()),
     )
 
 
@@ -233,6 +247,17 @@ def object_centre(obj) -> np.ndarray:
     return np.asarray(obj.pose[:3], dtype=float)  # markers: [x, y, z, yaw]
 
 
+def _stop_in_window(run: dict[str, np.ndarray], start: float, end: float) -> dict:
+    """How long after `start` the commands reached zero, and how many steps before `end` after
+    that still moved (a dropout, or a marker hidden from view)."""
+    t = run["t"]
+    stop = scoring.time_to_stop(t, run["v"], run["w"], start)
+    during = (t >= (stop["t_stop"] if stop["t_stop"] is not None else end)) & (t < end)
+    moving = (np.abs(run["v"]) > 0) | (np.abs(run["w"]) > 0)
+    stop["moving_after_stop"] = int(np.count_nonzero(during & moving))
+    return stop
+
+
 def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dict:
     """Every metric the scenario's world and settings make meaningful, JSON-ready."""
     t = run["t"]
@@ -266,22 +291,27 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         x, y, _, yaw = marker.pose
         err = scoring.parking_error(path[-1], (x, y, yaw), scenario.standoff)
         err["heading_error_deg"] = math.degrees(err["heading_error"])
+        err["still_since"] = scoring.still_since(t, run["v"], run["w"])
         out["parking"] = err
     if scenario.watch and len(t):
         out["watch"] = stop_on_sight(world, find_object(world, scenario.watch, "watch"), run)
     dropouts = []
     for start, end in scenario.perturbations.dropouts:
-        stop = scoring.time_to_stop(t, run["v"], run["w"], start)
-        during = (t >= (stop["t_stop"] if stop["t_stop"] is not None else end)) & (t < end)
-        moving = (np.abs(run["v"]) > 0) | (np.abs(run["w"]) > 0)
-        stop["moving_after_stop"] = int(np.count_nonzero(during & moving))
-        after_stop_step = during & (t > stop["t_stop"]) if stop["t_stop"] is not None else during
+        stop = _stop_in_window(run, start, end)
+        t_stop = stop["t_stop"]
+        after_stop_step = (t > t_stop) & (t < end) if t_stop is not None else np.zeros_like(t, bool)
         stop["commands_after_stop"] = int(run["replies"][after_stop_step].sum())
         dropouts.append(stop)
     if dropouts:
         out["dropouts"] = dropouts
         delays = [d["stop_delay"] for d in dropouts]
         out["dropout_stop_delay_max"] = None if None in delays else max(delays)
+    hidden = [
+        {"object": name, **_stop_in_window(run, start, end)}
+        for name, start, end in scenario.perturbations.hidden
+    ]
+    if hidden:
+        out["hidden"] = hidden
     return out
 
 

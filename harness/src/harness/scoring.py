@@ -149,6 +149,16 @@ def parking_error(pose, goal: tuple[float, float, float], standoff: float) -> di
     }
 
 
+def still_since(t, v, w) -> float | None:
+    """The time from which every command to the end of the run is zero (the robot stopped for
+    good), or None if the last command moves it."""
+    t, v, w = (np.asarray(a, dtype=float) for a in (t, v, w))
+    moving = np.nonzero((v != 0.0) | (w != 0.0))[0]
+    if len(t) == 0 or (len(moving) and moving[-1] == len(t) - 1):
+        return None
+    return float(t[moving[-1] + 1]) if len(moving) else float(t[0])
+
+
 def _max_abs(a: np.ndarray) -> float:
     finite = a[np.isfinite(a)]
     return float(np.abs(finite).max()) if len(finite) else 0.0

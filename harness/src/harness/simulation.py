@@ -28,6 +28,8 @@ class Perturbations:
     dropouts: tuple[tuple[float, float], ...] = ()  # [start, end) sim times without frames
     # Unpainted stretches of floor line 0: (arc length from its first point, length), metres.
     line_gaps: tuple[tuple[float, float], ...] = ()
+    # Objects left out of the frames: (object name, start, end), [start, end) sim times.
+    hidden: tuple[tuple[str, float, float], ...] = ()
 
 
 def with_line_gaps(world: World, gaps: tuple[tuple[float, float], ...]) -> World:
@@ -128,6 +130,10 @@ class Simulation:
             max_w=world.robot.max_w,
             delay_steps=delay,
         )
+        names = {obj.name for obj in world.objects}
+        for name, _, _ in p.hidden:
+            if name not in names:
+                raise ValueError(f"perturbations.hide: no object named {name!r} in the world")
         self.step_index = 0
         self.record = Record()
 
@@ -144,9 +150,14 @@ class Simulation:
         t = self.time
         return not any(start <= t < end for start, end in self.perturbations.dropouts)
 
+    def hidden_now(self) -> set[str]:
+        """Names of the objects a `hide` perturbation leaves out of the current frame."""
+        t = self.time
+        return {name for name, start, end in self.perturbations.hidden if start <= t < end}
+
     def render(self) -> np.ndarray:
         """The camera frame at the current step (noise keyed by the step, so reruns match)."""
-        return self.renderer.render(self.pose, frame=self.step_index)
+        return self.renderer.render(self.pose, frame=self.step_index, hidden=self.hidden_now())
 
     def step(self, command: tuple[float, float], *, frame: bool, replies: int, missed: bool):
         """Log the step that is ending, then move the robot by `command` over one period."""

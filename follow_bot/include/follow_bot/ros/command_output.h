@@ -14,10 +14,11 @@ namespace follow_bot {
 //
 // Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
 // ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
-// ~watchdog_timeout (s, 0.15). Invalid values throw std::invalid_argument.
+// ~watchdog_timeout (s, 0.15). Invalid values throw std::invalid_argument. Negative linear
+// commands are clamped to 0 unless `allow_reverse` (a behaviour that must back up, the parker).
 class CommandOutput {
  public:
-  CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh);
+  CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse = false);
   ~CommandOutput();
   CommandOutput(const CommandOutput&) = delete;
   CommandOutput& operator=(const CommandOutput&) = delete;

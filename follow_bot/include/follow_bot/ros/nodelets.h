@@ -9,5 +9,6 @@ namespace follow_bot {
 
 std::unique_ptr<nodelet::Nodelet> makeFollowerNodelet();
 std::unique_ptr<nodelet::Nodelet> makeBeaconChaserNodelet();
+std::unique_ptr<nodelet::Nodelet> makeParkerNodelet();
 
 }  // namespace follow_bot

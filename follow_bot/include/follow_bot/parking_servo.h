@@ -1,0 +1,101 @@
+// Parks a unicycle robot square in front of a planar marker, from the marker's pose.
+//
+// Approach: ViSP's mobile-robot image-based servo (vpServo, EYEINHAND_L_cVe_eJe) on two
+// features of the marker centre, its normalised image abscissa x and the depth feature
+// log(Z/Z*), with the unicycle's robot Jacobian eJe and the camera mounting cVe (as ViSP's
+// servoPioneerPoint2DDepth). Alone that ends at the right distance facing the marker, but
+// anywhere on a circle around it. To end square and centred, the desired abscissa x* is not the
+// image centre: the marker is held at a bearing b* = -k * phi (clamped to stay in view), phi
+// being the robot's angle off the marker's normal, so every metre driven also turns the robot
+// onto the normal (phi shrinks like distance^k). When the depth has converged but the lateral
+// or heading error is still too large (a close start far off the normal), the aligning stage
+// backs off to standoff + backoff with b* = +k * phi (which reduces phi while reversing) and
+// the approach repeats. Close to the standoff with the lateral error within tolerance, b* = phi
+// squares the heading up. Parked = position, lateral, heading and the command all within
+// tolerance; a disturbance beyond twice the tolerances starts the approach again.
+//
+// Searching: rotate at search_rate until the marker is first seen. Lost (seen before, not in
+// this frame): hold still and resume as soon as it is seen again; after lost_timeout without it
+// (it left the view rather than being hidden) search again, turning toward where it was last.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "follow_bot/ground_projection.h"
+#include "follow_bot/marker_target.h"
+#include "follow_bot/velocity_limiter.h"
+
+namespace follow_bot {
+
+enum class ParkingState { kSearching, kApproaching, kAligning, kParked, kLost };
+const char* toString(ParkingState state);
+
+struct ParkingServoConfig {
+  double standoff_m = 0.5;            // base origin to marker centre along its normal, m
+  double gain = 1.5;                  // vpServo lambda, 1/s
+  double steer_gain = 4.0;            // k in b* = -k * phi
+  double max_bearing_rad = 0.35;      // |b*| bound, keeps the marker inside the 60 deg view
+  double backoff_m = 0.7;             // aligning: reverse to standoff + backoff, m
+  double max_linear = 0.4;            // m/s, both components scaled down together beyond it
+  double max_angular = 1.2;           // rad/s, likewise
+  double search_rate = 1.0;           // rad/s; the first search turns this way (positive: left)
+  double lost_timeout = 2.0;          // s a lost marker is waited for before searching again
+  double position_tolerance = 0.003;  // m, along the normal
+  double lateral_tolerance = 0.004;   // m, across the normal
+  double heading_tolerance_rad = 0.5 * 3.14159265358979323846 / 180.0;
+  double linear_tolerance = 0.01;   // m/s, commanded speed to count as stopped
+  double angular_tolerance = 0.02;  // rad/s
+  CameraGeometry camera;            // mounting (height, pitch, x offset) for cVe and the base frame
+};
+
+std::string validate(const ParkingServoConfig& config);
+
+// The marker's pose as the robot needs it, in base_link (REP-103, metres and radians).
+struct ParkingError {
+  double along = 0;  // robot origin to marker centre along the marker's outward normal
+  double lateral =
+      0;  // robot origin off the normal, positive to the marker's left (robot's right when square)
+  double heading =
+      0;           // rotation (positive left) that would make the robot face the marker squarely
+  double phi = 0;  // robot's angle off the normal seen from the marker, atan2(lateral, along)
+  double bearing = 0;  // marker centre's bearing from the robot, positive left
+};
+
+// The parking error for a marker pose in the camera optical frame.
+ParkingError parkingError(const MarkerObservation& marker, const CameraGeometry& camera);
+
+class ParkingServo {
+ public:
+  explicit ParkingServo(const ParkingServoConfig& config);  // throws std::invalid_argument
+  ~ParkingServo();
+  ParkingServo(const ParkingServo&) = delete;
+  ParkingServo& operator=(const ParkingServo&) = delete;
+
+  // One frame at `time_s`: the marker if seen. Returns the desired command (before the node's
+  // limiter).
+  Twist2D update(const std::optional<MarkerObservation>& marker, double time_s);
+
+  // Takes the intrinsics (fx, fy, cx, cy) of `camera`, as from CameraInfo; the mounting stays.
+  void setIntrinsics(const CameraGeometry& camera);
+
+  ParkingState state() const { return state_; }
+  const std::optional<ParkingError>& lastError() const { return last_error_; }
+  const ParkingServoConfig& config() const { return config_; }
+
+ private:
+  Twist2D servo(const MarkerObservation& marker, double depth_goal, double bearing_goal);
+  bool withinTolerance(const ParkingError& error, double scale) const;
+
+  struct Impl;
+  ParkingServoConfig config_;
+  std::unique_ptr<Impl> impl_;
+  ParkingState state_ = ParkingState::kSearching;
+  bool seen_ = false;
+  double last_seen_s_ = 0.0;
+  double search_direction_ = 1.0;  // sign applied to |search_rate|
+  std::optional<ParkingError> last_error_;
+};
+
+}  // namespace follow_bot

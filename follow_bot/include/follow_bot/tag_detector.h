@@ -1,0 +1,63 @@
+// The parker's AprilTag target: one configured tag id, its pose from the camera intrinsics.
+//
+// Detection uses Debian's libapriltag (C) directly rather than ViSP's vpDetectorAprilTag: ViSP
+// 3.5 wraps the same detector but does not expose the decision margin, so it cannot gate weak
+// decodes (false positives on texture). The C detector reports decision_margin and hamming per
+// detection, reads the cv::Mat in place (no vpImage copy) and is configured like ViSP's (one
+// thread, same quad decimation), so it costs no more than a bare vpDetectorAprilTag::detect
+// (make bench measures both on the same frames).
+//
+// Pose: OpenCV's IPPE for a square gives both local minima of the planar pose problem (the tilt
+// ambiguity; Debian's libapriltag does not export its orthogonal-iteration solver). The one with
+// the smaller reprojection residual wins, then Gauss-Newton refines it on the corners;
+// when the two residuals are within `ambiguity_ratio` of each other or both below corner noise
+// (`ambiguity_px`: a far, face-on tag, where tilt is unobservable) the one closer in rotation to
+// the previous frame's pose is kept, so the pose never flips sign from frame to frame.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "follow_bot/marker_target.h"
+
+namespace follow_bot {
+
+struct TagDetectorConfig {
+  std::string family = "tag36h11";  // tag36h11, tag25h9, tag16h5, tagStandard41h12, ...
+  int id = 0;                       // only this id is accepted
+  double size_m = 0.30;             // edge of the black square, metres
+  double quad_decimate = 2.0;       // quad search on a 1/decimate image; corners refined at full
+  double min_decision_margin = 30;  // below this a decode is treated as a false positive
+  int max_hamming = 0;              // corrected bits accepted (0: exact codes only)
+  // The two pose solutions count as equally good (keep the previous frame's branch) when their
+  // reprojection residuals are within this ratio, or both below ambiguity_px (corner noise).
+  double ambiguity_ratio = 1.5;
+  double ambiguity_px = 0.2;
+};
+
+// Empty when usable, otherwise a message naming the first bad field.
+std::string validate(const TagDetectorConfig& config);
+
+class TagDetector : public MarkerDetector {
+ public:
+  // Throws std::invalid_argument for an invalid config or an unknown family.
+  explicit TagDetector(const TagDetectorConfig& config);
+  ~TagDetector() override;
+  TagDetector(const TagDetector&) = delete;
+  TagDetector& operator=(const TagDetector&) = delete;
+
+  std::optional<MarkerObservation> detect(const cv::Mat& gray,
+                                          const CameraGeometry& camera) override;
+  // Forgets the previous pose (the ambiguity tie-break starts afresh).
+  void reset();
+  const TagDetectorConfig& config() const { return config_; }
+
+ private:
+  struct Impl;
+  TagDetectorConfig config_;
+  std::unique_ptr<Impl> impl_;
+  std::optional<cv::Matx33d> previous_rotation_;
+};
+
+}  // namespace follow_bot

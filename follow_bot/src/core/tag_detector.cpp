@@ -1,0 +1,243 @@
+#include "follow_bot/tag_detector.h"
+
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+
+extern "C" {
+#include <apriltag/apriltag.h>
+#include <apriltag/tag16h5.h>
+#include <apriltag/tag25h9.h>
+#include <apriltag/tag36h11.h>
+#include <apriltag/tagCircle21h7.h>
+#include <apriltag/tagStandard41h12.h>
+}
+
+#include "follow_bot/config_checks.h"
+
+namespace follow_bot {
+
+namespace {
+
+struct FamilyFactory {
+  const char* name;
+  apriltag_family_t* (*create)();
+  void (*destroy)(apriltag_family_t*);
+};
+
+const FamilyFactory kFamilies[] = {
+    {"tag36h11", tag36h11_create, tag36h11_destroy},
+    {"tag25h9", tag25h9_create, tag25h9_destroy},
+    {"tag16h5", tag16h5_create, tag16h5_destroy},
+    {"tagCircle21h7", tagCircle21h7_create, tagCircle21h7_destroy},
+    {"tagStandard41h12", tagStandard41h12_create, tagStandard41h12_destroy},
+};
+
+const FamilyFactory* findFamily(const std::string& name) {
+  for (const FamilyFactory& family : kFamilies) {
+    if (name == family.name) return &family;
+  }
+  return nullptr;
+}
+
+// Angle of the rotation taking a to b, radians.
+double rotationAngle(const cv::Matx33d& a, const cv::Matx33d& b) {
+  const cv::Matx33d delta = a.t() * b;
+  const double cosine = (cv::trace(delta) - 1.0) / 2.0;
+  return std::acos(std::max(-1.0, std::min(1.0, cosine)));
+}
+
+struct PoseCandidate {
+  cv::Matx33d rotation;
+  cv::Vec3d translation;
+  double rms_px = 0;
+};
+
+// Reprojection RMS of `object` under (rotation, translation), pixels.
+double reprojectionRms(const std::vector<cv::Point3d>& object,
+                       const std::vector<cv::Point2d>& image, const CameraGeometry& camera,
+                       const cv::Matx33d& rotation, const cv::Vec3d& translation) {
+  double sum = 0;
+  for (std::size_t i = 0; i < object.size(); ++i) {
+    const cv::Vec3d p = rotation * cv::Vec3d(object[i]) + translation;
+    sum += std::pow(camera.fx * p[0] / p[2] + camera.cx - image[i].x, 2) +
+           std::pow(camera.fy * p[1] / p[2] + camera.cy - image[i].y, 2);
+  }
+  return std::sqrt(sum / object.size());
+}
+
+// Gauss-Newton on the corners' reprojection error from a close start (IPPE's). A fixed 6x6
+// solve with the analytic Jacobian: cv::solvePnPRefineLM does the same for 4 points at ~20x the
+// cost of its generic machinery, which alone would break the bench's 10 % pose budget.
+void refinePose(const std::vector<cv::Point3d>& object, const std::vector<cv::Point2d>& image,
+                const CameraGeometry& camera, cv::Matx33d& rotation, cv::Vec3d& translation) {
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    cv::Matx66d normal = cv::Matx66d::zeros();
+    cv::Vec6d gradient;
+    for (std::size_t i = 0; i < object.size(); ++i) {
+      const cv::Vec3d rotated = rotation * cv::Vec3d(object[i]);
+      const cv::Vec3d p = rotated + translation;
+      const double iz = 1.0 / p[2];
+      const double residual[2] = {camera.fx * p[0] * iz + camera.cx - image[i].x,
+                                  camera.fy * p[1] * iz + camera.cy - image[i].y};
+      // d(u, v)/dp, and dp/d(omega, t) = [-[rotated]x, I] for R <- exp([omega]x) R, t <- t + dt.
+      const cv::Matx23d dpixel(camera.fx * iz, 0, -camera.fx * p[0] * iz * iz,  //
+                               0, camera.fy * iz, -camera.fy * p[1] * iz * iz);
+      const cv::Matx33d skew(0, -rotated[2], rotated[1], rotated[2], 0, -rotated[0], -rotated[1],
+                             rotated[0], 0);
+      const cv::Matx23d by_rotation = dpixel * (-skew);
+      for (int row = 0; row < 2; ++row) {
+        const cv::Vec6d j(by_rotation(row, 0), by_rotation(row, 1), by_rotation(row, 2),
+                          dpixel(row, 0), dpixel(row, 1), dpixel(row, 2));
+        normal += j * j.t();
+        gradient += j * residual[row];
+      }
+    }
+    cv::Vec6d step;
+    if (!cv::solve(normal, -gradient, step, cv::DECOMP_CHOLESKY)) return;
+    cv::Matx33d delta;
+    cv::Rodrigues(cv::Vec3d(step[0], step[1], step[2]), delta);
+    rotation = delta * rotation;
+    translation += cv::Vec3d(step[3], step[4], step[5]);
+  }
+}
+
+}  // namespace
+
+std::string validate(const TagDetectorConfig& config) {
+  if (!findFamily(config.family)) {
+    std::string names;
+    for (const FamilyFactory& family : kFamilies) names += std::string(" ") + family.name;
+    return "family must be one of" + names + ", got '" + config.family + "'";
+  }
+  for (const std::string& error : {
+           requireInRange("id", config.id, 0, 1e6),
+           requirePositive("size_m", config.size_m),
+           requireInRange("quad_decimate", config.quad_decimate, 1.0, 8.0),
+           requireInRange("min_decision_margin", config.min_decision_margin, 0.0, 255.0),
+           requireInRange("max_hamming", config.max_hamming, 0, 3),
+           requireAtLeast("ambiguity_ratio", config.ambiguity_ratio, 1.0),
+           requireAtLeast("ambiguity_px", config.ambiguity_px, 0.0),
+       }) {
+    if (!error.empty()) return error;
+  }
+  return "";
+}
+
+struct TagDetector::Impl {
+  const FamilyFactory* factory = nullptr;
+  apriltag_family_t* family = nullptr;
+  apriltag_detector_t* detector = nullptr;
+
+  ~Impl() {
+    if (detector) apriltag_detector_destroy(detector);
+    if (family) factory->destroy(family);
+  }
+};
+
+TagDetector::TagDetector(const TagDetectorConfig& config)
+    : config_(config), impl_(std::make_unique<Impl>()) {
+  const std::string error = validate(config);
+  if (!error.empty()) throw std::invalid_argument(error);
+  impl_->factory = findFamily(config.family);
+  impl_->family = impl_->factory->create();
+  if (config.id >= static_cast<int>(impl_->family->ncodes)) {
+    throw std::invalid_argument("id must be < " + std::to_string(impl_->family->ncodes) + " for " +
+                                config.family + ", got " + std::to_string(config.id));
+  }
+  impl_->detector = apriltag_detector_create();
+  // The decode table only holds codes up to max_hamming bits away: nothing further can match.
+  apriltag_detector_add_family_bits(impl_->detector, impl_->family, config.max_hamming);
+  // ViSP's defaults, so the bench compares like with like: one thread, no blur, refined edges.
+  impl_->detector->nthreads = 1;
+  impl_->detector->quad_decimate = static_cast<float>(config.quad_decimate);
+  impl_->detector->quad_sigma = 0.0f;
+  impl_->detector->refine_edges = true;
+  impl_->detector->decode_sharpening = 0.25;
+}
+
+TagDetector::~TagDetector() = default;
+
+void TagDetector::reset() { previous_rotation_.reset(); }
+
+std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
+                                                     const CameraGeometry& camera) {
+  if (gray.empty() || gray.type() != CV_8UC1 || !validate(camera).empty()) return std::nullopt;
+  // apriltag reads the pixels in place; it never writes to its input image.
+  image_u8_t image{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]),
+                   const_cast<uint8_t*>(gray.ptr<uint8_t>())};
+  zarray_t* detections = apriltag_detector_detect(impl_->detector, &image);
+  apriltag_detection_t* best = nullptr;
+  for (int i = 0; i < zarray_size(detections); ++i) {
+    apriltag_detection_t* det = nullptr;
+    zarray_get(detections, i, &det);
+    if (det->id != config_.id || det->hamming > config_.max_hamming ||
+        det->decision_margin < config_.min_decision_margin) {
+      continue;
+    }
+    if (!best || det->decision_margin > best->decision_margin) best = det;
+  }
+  std::optional<MarkerObservation> out;
+  if (best) {
+    out = MarkerObservation{};
+    out->id = best->id;
+    out->quality = best->decision_margin;
+    for (int i = 0; i < 4; ++i) {  // apriltag wraps BL, BR, TR, TL; we report TL, TR, BR, BL
+      out->corners[i] = cv::Point2d(best->p[3 - i][0], best->p[3 - i][1]);
+    }
+
+    // Both minima of the planar pose problem (IPPE for a square, object points in apriltag's
+    // corner order), then the chosen one refined on the four corners (refinePose).
+    const double h = config_.size_m / 2.0;
+    const std::vector<cv::Point3d> object = {{-h, h, 0}, {h, h, 0}, {h, -h, 0}, {-h, -h, 0}};
+    std::vector<cv::Point2d> image;
+    for (int i = 0; i < 4; ++i) image.emplace_back(best->p[i][0], best->p[i][1]);
+    const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+    std::vector<cv::Mat> rvecs, tvecs;
+    std::vector<double> residuals;
+    cv::solvePnPGeneric(object, image, k, cv::noArray(), rvecs, tvecs, false,
+                        cv::SOLVEPNP_IPPE_SQUARE, cv::noArray(), cv::noArray(), residuals);
+    std::vector<PoseCandidate> candidates;
+    for (std::size_t s = 0; s < rvecs.size() && s < residuals.size(); ++s) {
+      PoseCandidate candidate;
+      cv::Rodrigues(rvecs[s], candidate.rotation);
+      candidate.translation = cv::Vec3d(tvecs[s]);
+      candidate.rms_px = residuals[s];
+      if (candidate.translation[2] > 0 && std::isfinite(candidate.rms_px)) {
+        candidates.push_back(candidate);
+      }
+    }
+    if (candidates.empty()) {
+      out.reset();
+    } else {
+      std::size_t pick = 0;
+      if (candidates.size() == 2) {
+        const double low = std::min(candidates[0].rms_px, candidates[1].rms_px);
+        const double high = std::max(candidates[0].rms_px, candidates[1].rms_px);
+        const bool ambiguous =
+            high <= config_.ambiguity_ratio * low || high <= config_.ambiguity_px;
+        if (ambiguous && previous_rotation_) {
+          pick = rotationAngle(*previous_rotation_, candidates[1].rotation) <
+                         rotationAngle(*previous_rotation_, candidates[0].rotation)
+                     ? 1
+                     : 0;
+        } else {
+          pick = candidates[1].rms_px < candidates[0].rms_px ? 1 : 0;
+        }
+      }
+      out->rotation = candidates[pick].rotation;
+      out->translation = candidates[pick].translation;
+      refinePose(object, image, camera, out->rotation, out->translation);
+      out->reprojection_error_px =
+          reprojectionRms(object, image, camera, out->rotation, out->translation);
+      previous_rotation_ = out->rotation;
+    }
+  }
+  apriltag_detections_destroy(detections);
+  return out;
+}
+
+}  // namespace follow_bot

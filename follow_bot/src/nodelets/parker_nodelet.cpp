@@ -1,0 +1,250 @@
+// Parker: find the parking marker (an AprilTag or a textured sign) and servo the robot to park
+// square in front of it. One camera frame in, one Twist out.
+//
+// Thin wiring around a MarkerDetector (TagDetector or SignDetector, by ~target) and
+// ParkingServo; CommandOutput adds limits (reversing allowed), the frame watchdog and the final
+// stop.
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <cv_bridge/cv_bridge.h>
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <std_msgs/String.h>
+#include <tf2/LinearMath/Matrix3x3.h>
+#include <tf2/LinearMath/Quaternion.h>
+#include <tf2_ros/transform_broadcaster.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <pluginlib/class_list_macros.hpp>
+
+#include "follow_bot/marker_target.h"
+#include "follow_bot/parking_servo.h"
+#include "follow_bot/ros/camera_input.h"
+#include "follow_bot/ros/command_output.h"
+#include "follow_bot/ros/nodelets.h"
+#include "follow_bot/ros/params.h"
+#include "follow_bot/tag_detector.h"
+#if __has_include("follow_bot/sign_detector.h")
+#include "follow_bot/sign_detector.h"
+#define FOLLOW_BOT_HAS_SIGN_DETECTOR 1
+#endif
+
+namespace follow_bot {
+
+namespace {
+
+template <typename T>
+T param(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
+  T value = fallback;
+  pnh.param(name, value, fallback);
+  return value;
+}
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// ~target and its detector's ~params; throws std::invalid_argument.
+std::unique_ptr<MarkerDetector> makeDetector(const ros::NodeHandle& pnh, std::string& target) {
+  target = param<std::string>(pnh, "target", "apriltag");
+  if (target == "apriltag") {
+    TagDetectorConfig config;
+    config.family = param(pnh, "tag_family", config.family);
+    config.id = param(pnh, "tag_id", config.id);
+    config.size_m = positiveParam(pnh, "tag_size", config.size_m);
+    config.quad_decimate = param(pnh, "quad_decimate", config.quad_decimate);
+    config.min_decision_margin = param(pnh, "min_decision_margin", config.min_decision_margin);
+    config.max_hamming = param(pnh, "max_hamming", config.max_hamming);
+    const std::string error = validate(config);
+    if (!error.empty()) throw std::invalid_argument("~tag parameters: " + error);
+    return std::make_unique<TagDetector>(config);
+  }
+  if (target == "sign") {
+#ifdef FOLLOW_BOT_HAS_SIGN_DETECTOR
+    SignDetectorConfig config;
+    config.image_path = param<std::string>(pnh, "sign_image", "");
+    config.width_m = param(pnh, "sign_width", 0.0);
+    return std::make_unique<SignDetector>(config);  // throws on a missing/featureless image
+#else
+    throw std::invalid_argument(
+        "~target 'sign': the sign detector is not built into this follow_bot yet");
+#endif
+  }
+  throw std::invalid_argument("~target must be 'apriltag' or 'sign', got '" + target + "'");
+}
+
+ParkingServoConfig readServoConfig(const ros::NodeHandle& pnh) {
+  ParkingServoConfig config;
+  config.standoff_m = positiveParam(pnh, "standoff", config.standoff_m);
+  config.gain = param(pnh, "gain", config.gain);
+  config.steer_gain = param(pnh, "steer_gain", config.steer_gain);
+  config.max_bearing_rad = param(pnh, "max_bearing_deg", 20.0) * kDegToRad;
+  config.backoff_m = param(pnh, "backoff", config.backoff_m);
+  config.max_linear = param(pnh, "max_speed", config.max_linear);
+  config.max_angular = param(pnh, "max_turn_rate", config.max_angular);
+  config.search_rate = param(pnh, "search_rate", config.search_rate);
+  config.lost_timeout = param(pnh, "lost_timeout", config.lost_timeout);
+  config.position_tolerance = param(pnh, "position_tolerance", config.position_tolerance);
+  config.lateral_tolerance = param(pnh, "lateral_tolerance", config.lateral_tolerance);
+  config.heading_tolerance_rad = param(pnh, "heading_tolerance_deg", 0.5) * kDegToRad;
+  config.camera.height_m = param(pnh, "camera_height", config.camera.height_m);
+  config.camera.pitch_rad = param(pnh, "camera_pitch_deg", 0.0) * kDegToRad;
+  config.camera.x_offset_m = param(pnh, "camera_x_offset", config.camera.x_offset_m);
+  const std::string error = validate(config);
+  if (!error.empty()) throw std::invalid_argument("~servo parameters: " + error);
+  return config;
+}
+
+}  // namespace
+
+class ParkerNodelet : public nodelet::Nodelet {
+ private:
+  void onInit() override {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    detector_ = makeDetector(pnh, target_);  // throws on bad ~params
+    const ParkingServoConfig servo_config = readServoConfig(pnh);
+    camera_ = servo_config.camera;
+    servo_ = std::make_unique<ParkingServo>(servo_config);
+    publish_tf_ = param(pnh, "publish_tf", false);
+    marker_frame_ = param<std::string>(pnh, "marker_frame", "parking_marker");
+    output_ = std::make_unique<CommandOutput>(nh, pnh, /*allow_reverse=*/true);
+
+    pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("target_pose", 1);
+    state_pub_ = pnh.advertise<std_msgs::String>("state", 1);
+    image_transport::ImageTransport private_transport(pnh);
+    debug_pub_ = private_transport.advertise("debug_image", 1);
+    if (publish_tf_) tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+    camera_info_sub_ = nh.subscribe("camera_info", 1, &ParkerNodelet::onCameraInfo, this);
+    image_transport::ImageTransport transport(nh);
+    image_sub_ = transport.subscribe("image", 1, &ParkerNodelet::onImage, this);
+    NODELET_INFO("parking in front of the %s at %.2f m", target_.c_str(), servo_config.standoff_m);
+  }
+
+  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    bool changed = false;  // the intrinsics are copied on every message either way
+    const std::string error = updateIntrinsics(*info, camera_, changed);
+    if (!error.empty()) {
+      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
+      return;
+    }
+    servo_->setIntrinsics(camera_);  // it keeps the marker inside this camera's view
+    has_intrinsics_ = true;
+  }
+
+  void onImage(const sensor_msgs::ImageConstPtr& msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::string error;
+    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
+    if (!frame) {
+      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
+      return;
+    }
+    output_->frameArrived();
+    const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
+    std::optional<MarkerObservation> marker;
+    Twist2D desired;
+    if (!has_intrinsics_) {
+      // No pose without intrinsics; the robot holds still rather than search blind.
+      NODELET_ERROR_THROTTLE(2.0, "no usable camera_info on %s yet: holding still",
+                             camera_info_sub_.getTopic().c_str());
+    } else {
+      cv::Mat gray;
+      cv::cvtColor(frame->image, gray, cv::COLOR_BGR2GRAY);
+      marker = detector_->detect(gray, camera_);
+      desired = servo_->update(marker, stamp.toSec());
+    }
+    output_->send(desired, stamp);
+    std_msgs::String state;
+    state.data = has_intrinsics_ ? toString(servo_->state()) : "searching";
+    state_pub_.publish(state);
+    if (marker) publishPose(msg->header, *marker);
+    if (debug_pub_.getNumSubscribers() > 0) publishDebug(*frame, marker, state.data);
+  }
+
+  void publishPose(const std_msgs::Header& header, const MarkerObservation& marker) {
+    geometry_msgs::PoseStamped pose;
+    pose.header = header;
+    pose.pose.position.x = marker.translation[0];
+    pose.pose.position.y = marker.translation[1];
+    pose.pose.position.z = marker.translation[2];
+    const cv::Matx33d& r = marker.rotation;
+    tf2::Quaternion q;
+    tf2::Matrix3x3(r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2))
+        .getRotation(q);
+    pose.pose.orientation.w = q.w();
+    pose.pose.orientation.x = q.x();
+    pose.pose.orientation.y = q.y();
+    pose.pose.orientation.z = q.z();
+    pose_pub_.publish(pose);
+    if (tf_broadcaster_) {
+      geometry_msgs::TransformStamped transform;
+      transform.header = header;
+      transform.child_frame_id = marker_frame_;
+      transform.transform.translation.x = marker.translation[0];
+      transform.transform.translation.y = marker.translation[1];
+      transform.transform.translation.z = marker.translation[2];
+      transform.transform.rotation = pose.pose.orientation;
+      tf_broadcaster_->sendTransform(transform);
+    }
+  }
+
+  void publishDebug(const cv_bridge::CvImage& frame, const std::optional<MarkerObservation>& marker,
+                    const std::string& state) {
+    cv_bridge::CvImage debug(frame.header, "bgr8", frame.image.clone());
+    if (marker) {
+      std::vector<cv::Point> outline;
+      for (const cv::Point2d& corner : marker->corners) outline.emplace_back(corner);
+      cv::polylines(debug.image, outline, true, cv::Scalar(0, 255, 255), 2);
+      // Axes from the marker centre: x red, y green, z blue, each half the marker's width.
+      const double half = cv::norm(marker->corners[1] - marker->corners[0]) > 0
+                              ? 0.5 * cv::norm(marker->translation) *
+                                    cv::norm(marker->corners[1] - marker->corners[0]) / camera_.fx
+                              : 0.1;
+      const std::vector<cv::Point3d> axes = {{0, 0, 0}, {half, 0, 0}, {0, half, 0}, {0, 0, half}};
+      cv::Vec3d rvec;
+      cv::Rodrigues(marker->rotation, rvec);
+      const cv::Matx33d k(camera_.fx, 0, camera_.cx, 0, camera_.fy, camera_.cy, 0, 0, 1);
+      std::vector<cv::Point2d> projected;
+      cv::projectPoints(axes, rvec, marker->translation, k, cv::noArray(), projected);
+      const cv::Scalar colours[] = {{0, 0, 255}, {0, 255, 0}, {255, 0, 0}};
+      for (int i = 0; i < 3; ++i) {
+        cv::line(debug.image, projected[0], projected[i + 1], colours[i], 2);
+      }
+      cv::putText(debug.image, "id " + std::to_string(marker->id), outline[0] - cv::Point(0, 8),
+                  cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 255, 255), 2);
+    }
+    cv::putText(debug.image, state, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.7,
+                cv::Scalar(255, 255, 255), 2);
+    debug_pub_.publish(debug.toImageMsg());
+  }
+
+  std::mutex mutex_;
+  std::string target_;
+  std::unique_ptr<MarkerDetector> detector_;
+  std::unique_ptr<ParkingServo> servo_;
+  CameraGeometry camera_;
+  bool has_intrinsics_ = false;
+  bool publish_tf_ = false;
+  std::string marker_frame_;
+  std::unique_ptr<CommandOutput> output_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
+  ros::Publisher pose_pub_;
+  ros::Publisher state_pub_;
+  image_transport::Publisher debug_pub_;
+  ros::Subscriber camera_info_sub_;
+  image_transport::Subscriber image_sub_;
+};
+
+std::unique_ptr<nodelet::Nodelet> makeParkerNodelet() { return std::make_unique<ParkerNodelet>(); }
+
+}  // namespace follow_bot
+
+PLUGINLIB_EXPORT_CLASS(follow_bot::ParkerNodelet, nodelet::Nodelet)
