@@ -50,6 +50,10 @@ def master_env():
         ("follow_bot parker", "_standoff:=0", "~standoff must be > 0"),
         ("follow_bot parker", "_search_rate:=9", "search_rate"),
         ("follow_bot parker", "_min_decision_margin:=-1", "min_decision_margin"),
+        ("follow_bot parker", "_target:=sign", "~sign_image must name"),
+        ("follow_bot parker", "_target:=sign _sign_image:=/no/such.png", "~sign_image: "),
+        ("follow_bot parker", "_target:=sign _sign_image:=/dev/null", "~sign_image: "),
+        ("follow_bot parker", "_target:=sign _sign_width:=0", "~sign_width must be > 0"),
         ("image_converter image_converter", "_circle_radius:=0", "~circle_radius"),
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
         ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),
@@ -62,7 +66,7 @@ def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, 
     # A node name of its own: private params set by `_x:=` stay on the master after a run.
     name = f"__name:=case{abs(hash(request.node.name))}"
     result = subprocess.run(
-        ["rosrun", *node.split(), param, name], env=master_env, capture_output=True, text=True,
+        ["rosrun", *node.split(), *param.split(), name], env=master_env, capture_output=True, text=True,
         timeout=60,
     )  # fmt: skip
     assert result.returncode == 1, result.stdout + result.stderr

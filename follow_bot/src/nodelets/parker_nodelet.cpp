@@ -31,11 +31,8 @@
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/ros/params.h"
-#include "follow_bot/tag_detector.h"
-#if __has_include("follow_bot/sign_detector.h")
 #include "follow_bot/sign_detector.h"
-#define FOLLOW_BOT_HAS_SIGN_DETECTOR 1
-#endif
+#include "follow_bot/tag_detector.h"
 
 namespace follow_bot {
 
@@ -66,15 +63,17 @@ std::unique_ptr<MarkerDetector> makeDetector(const ros::NodeHandle& pnh, std::st
     return std::make_unique<TagDetector>(config);
   }
   if (target == "sign") {
-#ifdef FOLLOW_BOT_HAS_SIGN_DETECTOR
     SignDetectorConfig config;
     config.image_path = param<std::string>(pnh, "sign_image", "");
-    config.width_m = param(pnh, "sign_width", 0.0);
-    return std::make_unique<SignDetector>(config);  // throws on a missing/featureless image
-#else
-    throw std::invalid_argument(
-        "~target 'sign': the sign detector is not built into this follow_bot yet");
-#endif
+    config.width_m = positiveParam(pnh, "sign_width", 0.40);
+    if (config.image_path.empty()) {
+      throw std::invalid_argument("~sign_image must name the sign's reference image file");
+    }
+    try {
+      return std::make_unique<SignDetector>(config);  // throws on a missing/featureless image
+    } catch (const std::invalid_argument& error) {
+      throw std::invalid_argument(std::string("~sign_image: ") + error.what());
+    }
   }
   throw std::invalid_argument("~target must be 'apriltag' or 'sign', got '" + target + "'");
 }
