@@ -53,14 +53,17 @@ struct ParkingServoConfig {
 std::string validate(const ParkingServoConfig& config);
 
 // The marker's pose as the robot needs it, in base_link (REP-103, metres and radians).
+// along: robot origin to marker centre along the marker's outward normal.
+// lateral: robot origin off the normal, positive to the marker's left (the robot's right when
+//   square). heading: the rotation (positive left) that would make the robot face the marker
+//   squarely. phi: the robot's angle off the normal seen from the marker, atan2(lateral, along).
+// bearing: the marker centre's bearing from the robot, positive left.
 struct ParkingError {
-  double along = 0;  // robot origin to marker centre along the marker's outward normal
-  double lateral =
-      0;  // robot origin off the normal, positive to the marker's left (robot's right when square)
-  double heading =
-      0;           // rotation (positive left) that would make the robot face the marker squarely
-  double phi = 0;  // robot's angle off the normal seen from the marker, atan2(lateral, along)
-  double bearing = 0;  // marker centre's bearing from the robot, positive left
+  double along = 0;
+  double lateral = 0;
+  double heading = 0;
+  double phi = 0;
+  double bearing = 0;
 };
 
 // The parking error for a marker pose in the camera optical frame.
