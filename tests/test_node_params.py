@@ -66,8 +66,8 @@ def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, 
     # A node name of its own: private params set by `_x:=` stay on the master after a run.
     name = f"__name:=case{abs(hash(request.node.name))}"
     result = subprocess.run(
-        ["rosrun", *node.split(), *param.split(), name], env=master_env, capture_output=True, text=True,
-        timeout=60,
+        ["rosrun", *node.split(), *param.split(), name],
+        env=master_env, capture_output=True, text=True, timeout=60,
     )  # fmt: skip
     assert result.returncode == 1, result.stdout + result.stderr
     assert words in result.stdout + result.stderr
