@@ -29,7 +29,7 @@ def test_twelve_start_poses_four_with_the_sign_out_of_view():
         scenario, world, sign = _loaded(path)
         assert isinstance(sign, TextureMarker) and world.name == "parking_sign"
         launch = scenario.behaviour
-        assert (launch.package, launch.launch_file) == ("follow_bot", "park.launch")
+        assert (launch.package, launch.launch_file) == ("follow_bot", "parker.launch")
         assert launch.args == {"target": "sign"}
         assert scenario.duration == 25.0
         x, y, yaw = scenario.start
