@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 import pytest
 
+from harness.geometry import rotation_angle_deg
 from harness.render import Renderer
 from harness.world import load_world
 
@@ -33,15 +34,6 @@ WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 def parking():
     world = load_world(WORLDS / "parking.yaml")
     return world, Renderer(world), world.objects[0]
-
-
-def expected_pose(camera, robot, tag):
-    """Tag frame (x right, y down, z into the tag, seen from the front) in the optical frame."""
-    x, y, z, yaw = tag.pose
-    r, t = camera.world_to_camera(robot)
-    right = [-math.sin(yaw), math.cos(yaw), 0.0]
-    axes = np.column_stack([right, [0.0, 0.0, -1.0], [-math.cos(yaw), -math.sin(yaw), 0.0]])
-    return r @ axes, r @ np.array([x, y, z]) + t
 
 
 def probe(renderer, robots, tmp_path, size):
@@ -62,10 +54,6 @@ def probe(renderer, robots, tmp_path, size):
         v = [float(x) for x in line.split()]
         poses.append((np.array(v[3:12]).reshape(3, 3), np.array(v[:3])))
     return poses
-
-
-def rotation_error_deg(a, b):
-    return math.degrees(math.acos(np.clip((np.trace(a.T @ b) - 1.0) / 2.0, -1.0, 1.0)))
 
 
 def tilt_deg(rotation):
@@ -96,9 +84,9 @@ def test_pose_within_1cm_and_1deg_where_observable(parking, tmp_path):
     failures = []
     poses = probe(renderer, robots, tmp_path, tag.size)
     for v, robot, (r, t) in zip(VIEWS, robots, poses, strict=True):
-        r_true, t_true = expected_pose(renderer.camera, robot, tag)
+        r_true, t_true = renderer.camera.marker_pose(robot, tag.pose)
         position = float(np.linalg.norm(t - t_true))
-        angle = rotation_error_deg(r, r_true)
+        angle = rotation_angle_deg(r, r_true)
         observable = v[0] <= 1.5 or abs(v[1]) >= 15
         if position > 0.01 or angle > (1.0 if observable else 5.0):
             failures.append(f"{v}: position {position * 100:.2f} cm, rotation {angle:.2f} deg")
@@ -112,7 +100,7 @@ def test_sweep_out_to_3m_never_flips(parking, tmp_path, incidence_deg, far_bound
     robots = [view(tag, d, incidence_deg, 0.0) for d in distances]
     errors = []
     for robot, (r, _) in zip(robots, probe(renderer, robots, tmp_path, tag.size), strict=True):
-        r_true, _ = expected_pose(renderer.camera, robot, tag)
+        r_true, _ = renderer.camera.marker_pose(robot, tag.pose)
         errors.append(tilt_deg(r) - tilt_deg(r_true))
     errors = np.array(errors)
     near = distances <= 1.5
