@@ -54,6 +54,7 @@ def master_env():
         ("follow_bot parker", "_target:=sign _sign_image:=/no/such.png", "~sign_image: "),
         ("follow_bot parker", "_target:=sign _sign_image:=/dev/null", "~sign_image: "),
         ("follow_bot parker", "_target:=sign _sign_width:=0", "~sign_width must be > 0"),
+        ("follow_bot parker", "_camera_pitch_deg:=95", "~camera_pitch_deg must be within"),
         ("image_converter image_converter", "_circle_radius:=0", "~circle_radius"),
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
         ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),
@@ -66,8 +67,8 @@ def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, 
     # A node name of its own: private params set by `_x:=` stay on the master after a run.
     name = f"__name:=case{abs(hash(request.node.name))}"
     result = subprocess.run(
-        ["rosrun", *node.split(), *param.split(), name], env=master_env, capture_output=True, text=True,
-        timeout=60,
+        ["rosrun", *node.split(), *param.split(), name],
+        env=master_env, capture_output=True, text=True, timeout=60,
     )  # fmt: skip
     assert result.returncode == 1, result.stdout + result.stderr
     assert words in result.stdout + result.stderr
