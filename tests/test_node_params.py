@@ -54,6 +54,7 @@ def master_env():
         ("follow_bot parker", "_target:=sign _sign_image:=/no/such.png", "~sign_image: "),
         ("follow_bot parker", "_target:=sign _sign_image:=/dev/null", "~sign_image: "),
         ("follow_bot parker", "_target:=sign _sign_width:=0", "~sign_width must be > 0"),
+        ("follow_bot parker", "_camera_pitch_deg:=95", "~camera_pitch_deg must be within"),
         ("image_converter image_converter", "_circle_radius:=0", "~circle_radius"),
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
         ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),

@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 import pytest
 
+from harness.geometry import incidence_deg, rotation_angle_deg
 from harness.render import Renderer
 from harness.scenario import load_scenario
 from harness.world import load_world
@@ -26,16 +27,6 @@ NOISE_SIGMA = 2.0
 HIDDEN_PX = 0.1
 
 
-def expected_marker_pose(camera, pose, marker):
-    """Marker frame (x right, y down, z into the board, seen from the front) in the optical
-    frame, for a marker with pose [x, y, z, yaw]."""
-    x, y, z, yaw = marker.pose
-    r, t = camera.world_to_camera(pose)
-    right = [-math.sin(yaw), math.cos(yaw), 0.0]
-    axes = np.column_stack([right, [0.0, 0.0, -1.0], [-math.cos(yaw), -math.sin(yaw), 0.0]])
-    return r @ axes, r @ np.array([x, y, z]) + t
-
-
 def facing(sign, distance, lateral=0.0, heading_offset_deg=0.0, look_at=True):
     """Robot pose `distance` in front of the sign along its normal and `lateral` to its right
     (seen from the front), heading at the sign's centre (or along its normal when not
@@ -45,15 +36,6 @@ def facing(sign, distance, lateral=0.0, heading_offset_deg=0.0, look_at=True):
     ry = y + distance * math.sin(yaw) + lateral * math.cos(yaw)
     heading = math.atan2(y - ry, x - rx) if look_at else yaw + math.pi
     return (rx, ry, heading + math.radians(heading_offset_deg))
-
-
-def angle_deg(a, b):
-    return math.degrees(math.acos(min(1.0, (np.trace(a.T @ b) - 1.0) / 2.0)))
-
-
-def incidence_deg(rot, centre):
-    """Angle between the line of sight to the sign's centre and the sign's normal."""
-    return math.degrees(math.acos(min(1.0, abs(rot[:, 2] @ centre) / np.linalg.norm(centre))))
 
 
 def observable_bound(camera, sign, rot, centre):
@@ -94,11 +76,11 @@ def measure(scene, tmp_path, poses, independent):
         cv2.imwrite(str(frames[-1]), renderer.render(pose, frame=i))
     rows = []
     for pose, seen in zip(poses, run_probe(world, sign, frames, independent), strict=True):
-        rot, centre = expected_marker_pose(world.camera, pose, sign)
+        rot, centre = world.camera.marker_pose(pose, sign.pose)
         row = {"pose": pose, "range": float(np.linalg.norm(centre)), "seen": seen}
         if seen["found"]:
             row["position_error"] = float(np.linalg.norm(np.array(seen["translation"]) - centre))
-            row["angle_error"] = angle_deg(np.array(seen["rotation"]), rot)
+            row["angle_error"] = rotation_angle_deg(np.array(seen["rotation"]), rot)
             row["bound"] = observable_bound(world.camera, sign, rot, centre)
             row["incidence"] = incidence_deg(rot, centre)
         rows.append(row)

@@ -1,7 +1,8 @@
 """The parker's tag pose on frames the harness renders of the parking world, at known poses.
 
 Frames come from harness.render.Renderer (the simulator's own renderer), the pose from the
-parker's TagDetector through the `tag_pose_probe` tool, the truth from the world file.
+parker's TagDetector through the `marker_probe` tool (AprilTag mode), the truth from the world
+file.
 
 - Position within 1 cm at 0.5-3 m, every view.
 - Orientation within 1 deg wherever it is observable: up to 1.5 m, or at >= 15 deg incidence.
@@ -15,6 +16,7 @@ parker's TagDetector through the `tag_pose_probe` tool, the truth from the world
   within 3 deg in every frame.
 """
 
+import json
 import math
 import subprocess
 from pathlib import Path
@@ -23,6 +25,7 @@ import cv2
 import numpy as np
 import pytest
 
+from harness.geometry import rotation_angle_deg
 from harness.render import Renderer
 from harness.world import load_world
 
@@ -35,37 +38,27 @@ def parking():
     return world, Renderer(world), world.objects[0]
 
 
-def expected_pose(camera, robot, tag):
-    """Tag frame (x right, y down, z into the tag, seen from the front) in the optical frame."""
-    x, y, z, yaw = tag.pose
-    r, t = camera.world_to_camera(robot)
-    right = [-math.sin(yaw), math.cos(yaw), 0.0]
-    axes = np.column_stack([right, [0.0, 0.0, -1.0], [-math.cos(yaw), -math.sin(yaw), 0.0]])
-    return r @ axes, r @ np.array([x, y, z]) + t
-
-
-def probe(renderer, robots, tmp_path, size):
+def probe(renderer, robots, tmp_path, tag):
     cam = renderer.camera
     files = []
     for i, robot in enumerate(robots):
         path = tmp_path / f"frame{i:03d}.png"
         cv2.imwrite(str(path), cv2.cvtColor(renderer.render(robot), cv2.COLOR_BGR2GRAY))
         files.append(str(path))
-    args = [str(v) for v in (cam.fx, cam.fy, cam.cx, cam.cy, size)]
+    args = ["--tag-size", str(tag.size), "--tag-id", str(tag.tag_id), "--tag-family", tag.family]
+    for flag, value in (("--fx", cam.fx), ("--fy", cam.fy), ("--cx", cam.cx), ("--cy", cam.cy)):
+        args += [flag, str(value)]
     out = subprocess.run(
-        ["rosrun", "follow_bot", "tag_pose_probe", *args, *files],
+        ["rosrun", "follow_bot", "marker_probe", *args, *files],
         capture_output=True, text=True, check=True, timeout=120,
-    ).stdout.split("\n")  # fmt: skip
+    ).stdout.splitlines()  # fmt: skip
     poses = []
-    for line in out[: len(files)]:
-        assert line != "none", "tag not detected"
-        v = [float(x) for x in line.split()]
-        poses.append((np.array(v[3:12]).reshape(3, 3), np.array(v[:3])))
+    for line in out:
+        seen = json.loads(line)
+        assert seen["found"], f"tag not detected in {seen['frame']}"
+        poses.append((np.array(seen["rotation"]), np.array(seen["translation"])))
+    assert len(poses) == len(files)
     return poses
-
-
-def rotation_error_deg(a, b):
-    return math.degrees(math.acos(np.clip((np.trace(a.T @ b) - 1.0) / 2.0, -1.0, 1.0)))
 
 
 def tilt_deg(rotation):
@@ -94,11 +87,11 @@ def test_pose_within_1cm_and_1deg_where_observable(parking, tmp_path):
     world, renderer, tag = parking
     robots = [view(tag, *v) for v in VIEWS]
     failures = []
-    poses = probe(renderer, robots, tmp_path, tag.size)
+    poses = probe(renderer, robots, tmp_path, tag)
     for v, robot, (r, t) in zip(VIEWS, robots, poses, strict=True):
-        r_true, t_true = expected_pose(renderer.camera, robot, tag)
+        r_true, t_true = renderer.camera.marker_pose(robot, tag.pose)
         position = float(np.linalg.norm(t - t_true))
-        angle = rotation_error_deg(r, r_true)
+        angle = rotation_angle_deg(r, r_true)
         observable = v[0] <= 1.5 or abs(v[1]) >= 15
         if position > 0.01 or angle > (1.0 if observable else 5.0):
             failures.append(f"{v}: position {position * 100:.2f} cm, rotation {angle:.2f} deg")
@@ -111,8 +104,8 @@ def test_sweep_out_to_3m_never_flips(parking, tmp_path, incidence_deg, far_bound
     distances = np.arange(0.5, 3.001, 0.1)
     robots = [view(tag, d, incidence_deg, 0.0) for d in distances]
     errors = []
-    for robot, (r, _) in zip(robots, probe(renderer, robots, tmp_path, tag.size), strict=True):
-        r_true, _ = expected_pose(renderer.camera, robot, tag)
+    for robot, (r, _) in zip(robots, probe(renderer, robots, tmp_path, tag), strict=True):
+        r_true, _ = renderer.camera.marker_pose(robot, tag.pose)
         errors.append(tilt_deg(r) - tilt_deg(r_true))
     errors = np.array(errors)
     near = distances <= 1.5

@@ -1,9 +1,10 @@
-// Runs a marker detector over image files and prints one JSON line per frame: whether the marker
-// was found, its pose in the camera optical frame, its corners and the detection time (wall and
-// process CPU, ms). Used by
-// tests/test_sign_pose.py to check poses on frames rendered by the harness.
+// Runs a marker detector (the parking sign or an AprilTag) over image files and prints one JSON
+// line per frame: whether the marker was found, its pose in the camera optical frame, its corners
+// and the detection time (wall and process CPU, ms). Used by tests/test_sign_pose.py and
+// tests/test_tag_pose_accuracy.py to check poses on frames rendered by the harness.
 //
-//   marker_probe --sign IMAGE --width W [--fx F --fy F --cx C --cy C] [--independent] FRAME...
+//   marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N] [--tag-family F])
+//                [--fx F --fy F --cx C --cy C] [--independent] FRAME...
 //
 // Intrinsics default to the harness camera (640x480, 60 deg HFOV). Frames are read as grey
 // levels. One detector sees the frames in order, as a node would (its previous pose settles the
@@ -14,6 +15,7 @@
 #include <ctime>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -21,12 +23,14 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "follow_bot/sign_detector.h"
+#include "follow_bot/tag_detector.h"
 
 namespace {
 
 struct Options {
   std::string sign_image;
   double sign_width_m = 0.0;
+  std::optional<follow_bot::TagDetectorConfig> tag;  // set by --tag-size: detect an AprilTag
   follow_bot::CameraGeometry camera;
   bool independent = false;
   std::vector<std::string> frames;
@@ -34,8 +38,9 @@ struct Options {
 
 [[noreturn]] void usage(const std::string& problem) {
   std::cerr << "marker_probe: " << problem << "\n"
-            << "usage: marker_probe --sign IMAGE --width W [--fx F --fy F --cx C --cy C]"
-               " [--independent] FRAME...\n";
+            << "usage: marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N]"
+               " [--tag-family F])\n"
+               "                    [--fx F --fy F --cx C --cy C] [--independent] FRAME...\n";
   std::exit(2);
 }
 
@@ -44,6 +49,12 @@ double number(const std::string& flag, const char* text) {
   const double value = std::strtod(text, &end);
   if (end == text || *end != '\0') usage(flag + " needs a number, got '" + text + "'");
   return value;
+}
+
+// The tag options given so far; the first one switches the probe to AprilTag mode.
+follow_bot::TagDetectorConfig& tagConfig(Options& options) {
+  if (!options.tag) options.tag.emplace();
+  return *options.tag;
 }
 
 Options parse(int argc, char** argv) {
@@ -59,6 +70,12 @@ Options parse(int argc, char** argv) {
       options.sign_image = argv[++i];
     } else if (arg == "--width") {
       options.sign_width_m = number(arg, argv[++i]);
+    } else if (arg == "--tag-size") {
+      tagConfig(options).size_m = number(arg, argv[++i]);
+    } else if (arg == "--tag-id") {
+      tagConfig(options).id = static_cast<int>(number(arg, argv[++i]));
+    } else if (arg == "--tag-family") {
+      tagConfig(options).family = argv[++i];
     } else if (arg == "--fx") {
       options.camera.fx = number(arg, argv[++i]);
     } else if (arg == "--fy") {
@@ -73,13 +90,16 @@ Options parse(int argc, char** argv) {
       options.frames.push_back(arg);
     }
   }
-  if (options.sign_image.empty()) usage("--sign IMAGE is required");
+  if (options.sign_image.empty() == !options.tag) {
+    usage("give either --sign IMAGE --width W or --tag-size S");
+  }
   if (options.frames.empty()) usage("no frames given");
   return options;
 }
 
-// The one place that knows which detector the options ask for (a tag mode would go here).
+// The one place that knows which detector the options ask for.
 std::unique_ptr<follow_bot::MarkerDetector> makeDetector(const Options& options) {
+  if (options.tag) return std::make_unique<follow_bot::TagDetector>(*options.tag);
   follow_bot::SignDetectorConfig config;
   config.image_path = options.sign_image;
   config.width_m = options.sign_width_m;

@@ -1,5 +1,4 @@
 // rostest: the beacon chaser through its topics (wall time, no simulator), fed bad input.
-#include <cv_bridge/cv_bridge.h>
 #include <dynamic_reconfigure/Reconfigure.h>
 #include <geometry_msgs/Twist.h>
 #include <gtest/gtest.h>
@@ -14,6 +13,8 @@
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
+
+#include "frame_msg.h"
 
 namespace {
 
@@ -88,11 +89,8 @@ class BeaconChaserNode : public ::testing::Test {
   }
 
   sensor_msgs::Image frame(const cv::Mat& bgr) {
-    std_msgs::Header header;
     stamp_ += ros::Duration(1.0 / 30.0);
-    header.stamp = stamp_;
-    header.frame_id = "camera_rgb_optical_frame";
-    return *cv_bridge::CvImage(header, "bgr8", bgr).toImageMsg();
+    return follow_bot::test::bgrFrame(bgr, stamp_);
   }
 
   // rosout lines from `node` (e.g. "/beacon_approach") at WARN or above that contain `words`.

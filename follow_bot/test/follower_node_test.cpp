@@ -5,11 +5,12 @@
 #include <sensor_msgs/Image.h>
 
 #include <cmath>
-#include <cstring>
 #include <string>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
+
+#include "frame_msg.h"
 
 namespace {
 
@@ -42,17 +43,8 @@ class FollowerNode : public ::testing::Test {
   }
 
   sensor_msgs::Image frame(const cv::Mat& bgr) {
-    sensor_msgs::Image msg;
     stamp_ += ros::Duration(1.0 / 30.0);
-    msg.header.stamp = stamp_;
-    msg.header.frame_id = "camera_rgb_optical_frame";
-    msg.width = bgr.cols;
-    msg.height = bgr.rows;
-    msg.encoding = "bgr8";
-    msg.step = bgr.cols * 3;
-    msg.data.resize(msg.step * bgr.rows);
-    for (int r = 0; r < bgr.rows; ++r) std::memcpy(&msg.data[r * msg.step], bgr.ptr(r), msg.step);
-    return msg;
+    return follow_bot::test::bgrFrame(bgr, stamp_);
   }
 
   ros::NodeHandle nh_;

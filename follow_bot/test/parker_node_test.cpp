@@ -10,12 +10,12 @@
 #include <std_msgs/String.h>
 
 #include <cmath>
-#include <cstring>
 #include <string>
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
 
+#include "frame_msg.h"
 #include "synthetic_tag.h"
 
 namespace {
@@ -69,17 +69,8 @@ class ParkerNode : public ::testing::Test {
   }
 
   sensor_msgs::Image frame(const cv::Mat& bgr) {
-    sensor_msgs::Image msg;
     stamp_ += ros::Duration(1.0 / 30.0);
-    msg.header.stamp = stamp_;
-    msg.header.frame_id = "camera_rgb_optical_frame";
-    msg.width = bgr.cols;
-    msg.height = bgr.rows;
-    msg.encoding = "bgr8";
-    msg.step = bgr.cols * 3;
-    msg.data.resize(msg.step * bgr.rows);
-    for (int r = 0; r < bgr.rows; ++r) std::memcpy(&msg.data[r * msg.step], bgr.ptr(r), msg.step);
-    return msg;
+    return follow_bot::test::bgrFrame(bgr, stamp_);
   }
 
   // The harness camera looking straight at the 0.30 m tag id 0, 1.5 m away. Rendered once:

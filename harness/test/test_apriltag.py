@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from harness.apriltag_image import AprilTagError, detect, family_geometry, tag_image
+from harness.geometry import incidence_deg, rotation_angle_deg
 from harness.render import Renderer
 
 
@@ -53,15 +54,6 @@ def _look_at_tag(tag, x, y, offset=0.0):
     return (x, y, math.atan2(tag.pose[1] - y, tag.pose[0] - x) + offset)
 
 
-def _expected_tag_pose(camera, pose, tag):
-    """Tag frame (x right, y down, z into the tag, seen from the front) in the optical frame."""
-    x, y, z, yaw = tag.pose
-    r, t = camera.world_to_camera(pose)
-    right = [-math.sin(yaw), math.cos(yaw), 0.0]
-    axes = np.column_stack([right, [0.0, 0.0, -1.0], [-math.cos(yaw), -math.sin(yaw), 0.0]])
-    return r @ axes, r @ np.array([x, y, z]) + t
-
-
 # (x, y, bearing offset): 1, 2, 2.5, 3 m straight in front, near face-on, then oblique views
 # (incidence 17-32 deg).
 VIEWS = [
@@ -98,15 +90,14 @@ def test_rendered_tag_detected_with_true_pose(parking, view):
     truth = renderer.object_projections(pose)[0]["corners_px"]  # TL, TR, BR, BL
     # Convention errors (pixel centres, tag size, principal point) would be >= 0.5 px.
     np.testing.assert_allclose(det.corners, np.array(truth)[[3, 2, 1, 0]], atol=0.3)
-    rot, centre = _expected_tag_pose(cam, pose, tag)
+    rot, centre = cam.marker_pose(pose, tag.pose)
     rng = float(np.linalg.norm(centre))
     assert 0.9 <= rng <= 3.1
     assert np.linalg.norm(det.translation - centre) < 0.01
-    rel = det.rotation.T @ rot
-    angle = math.degrees(math.acos(min(1.0, (np.trace(rel) - 1.0) / 2.0)))
+    angle = rotation_angle_deg(det.rotation, rot)
     roll = math.degrees(math.atan2(det.rotation[1, 0], det.rotation[0, 0]))
     assert roll == pytest.approx(math.degrees(math.atan2(rot[1, 0], rot[0, 0])), abs=1.0)
-    incidence = math.degrees(math.acos(abs(rot[:, 2] @ centre) / rng))
+    incidence = incidence_deg(rot, centre)
     if rng <= 1.05 or incidence >= 15.0:
         assert angle < 1.0
     else:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from harness.camera import Camera
+from harness.geometry import incidence_deg, rotation_angle_deg
 
 FX = 320.0 / math.tan(math.radians(30.0))  # 554.2563 px for 640 px and 60 deg
 
@@ -74,3 +75,22 @@ def test_ground_homography_round_trip():
     np.testing.assert_allclose(hom[:, :2] / hom[:, 2:], uv, atol=1e-9)
     np.testing.assert_allclose(cam.pixel_to_ground(uv, pose), floor, atol=1e-9)
     assert np.isnan(cam.pixel_to_ground([[320.0, 10.0]], pose)).all()  # above the horizon
+
+
+def test_marker_pose_face_on_and_turned():
+    cam = Camera(height_m=0.3)
+    # Facing the robot 2 m ahead, 0.5 m to its left and 0.5 m above the lens: marker axes are
+    # the optical axes (x right, y down, z away), centre at (-0.5, -0.5, 2).
+    rot, centre = cam.marker_pose((0.0, 0.0, 0.0), (2.0, 0.5, 0.8, math.pi))
+    np.testing.assert_allclose(rot, np.eye(3), atol=1e-12)
+    np.testing.assert_allclose(centre, [-0.5, -0.5, 2.0], atol=1e-12)
+    # Seen from 1 m further back.
+    rot2, centre2 = cam.marker_pose((-1.0, 0.0, 0.0), (2.0, 0.5, 0.8, math.pi))
+    np.testing.assert_allclose(centre2, [-0.5, -0.5, 3.0], atol=1e-12)
+    # Turned 0.3 rad about the vertical, straight ahead: the rotation and the incidence are both
+    # 0.3 rad.
+    rot, centre = cam.marker_pose((0.0, 0.0, 0.0), (2.0, 0.0, 0.3, math.pi - 0.3))
+    np.testing.assert_allclose(centre, [0.0, 0.0, 2.0], atol=1e-12)
+    assert rotation_angle_deg(np.eye(3), rot) == pytest.approx(math.degrees(0.3))
+    assert incidence_deg(rot, centre) == pytest.approx(math.degrees(0.3))
+    assert rotation_angle_deg(rot, rot) == pytest.approx(0.0, abs=1e-6)

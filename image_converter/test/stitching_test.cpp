@@ -244,5 +244,21 @@ TEST(MatchOptions, RejectsUnusableValues) {
   EXPECT_FALSE(parseDetector("surf", detector));
 }
 
+TEST(RatioTestMatches, KeepsOnlyUnambiguousNearestNeighbours) {
+  // 1-D descriptors: query 0.0 is nearest 0.1, the next at 1.0 (kept); 2.0 is midway between
+  // 1.9 and 2.1 (ambiguous, dropped); 1.05 is nearest 1.0 (kept). One train row: no second
+  // neighbour, nothing kept.
+  const cv::Mat train = (cv::Mat_<float>(4, 1) << 0.1f, 1.0f, 1.9f, 2.1f);
+  const cv::Mat query = (cv::Mat_<float>(3, 1) << 0.0f, 2.0f, 1.05f);
+  const cv::BFMatcher matcher(cv::NORM_L2);
+  const std::vector<cv::DMatch> matches = ratioTestMatches(matcher, query, train, 0.75);
+  ASSERT_EQ(matches.size(), 2u);
+  EXPECT_EQ(matches[0].queryIdx, 0);
+  EXPECT_EQ(matches[0].trainIdx, 0);
+  EXPECT_EQ(matches[1].queryIdx, 2);
+  EXPECT_EQ(matches[1].trainIdx, 1);
+  EXPECT_TRUE(ratioTestMatches(matcher, query, train.rowRange(0, 1), 0.75).empty());
+}
+
 }  // namespace
 }  // namespace image_converter

@@ -11,6 +11,7 @@
 #include <opencv2/video/tracking.hpp>
 
 #include "follow_bot/config_checks.h"
+#include "image_converter/feature_matching.h"
 
 namespace follow_bot {
 namespace {
@@ -221,8 +222,6 @@ std::optional<SignDetector::Matches> SignDetector::matchIn(const cv::Mat& gray,
   sift_->detectAndCompute(searched, cv::noArray(), keypoints, descriptors);
   if (static_cast<int>(keypoints.size()) < config_.min_inliers) return std::nullopt;
 
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher_.knnMatch(descriptors, reference_descriptors_, knn, 2);
   std::vector<cv::Point2f> window_positions = keypointPositions(keypoints);
   if (half_resolution) {  // half-resolution pixel q covers full pixels 2q and 2q + 1
     for (cv::Point2f& p : window_positions) p = p * 2.0f + cv::Point2f(0.5f, 0.5f);
@@ -230,12 +229,12 @@ std::optional<SignDetector::Matches> SignDetector::matchIn(const cv::Mat& gray,
   const cv::Point2f offset(static_cast<float>(window.x), static_cast<float>(window.y));
   std::vector<cv::Point3f> object_points;
   std::vector<cv::Point2f> plane_points, image_points;
-  for (const std::vector<cv::DMatch>& pair : knn) {
-    if (pair.size() < 2 || pair[0].distance >= config_.ratio * pair[1].distance) continue;
-    const cv::Point3f& p = reference_points_[pair[0].trainIdx];
+  for (const cv::DMatch& match : image_converter::ratioTestMatches(
+           matcher_, descriptors, reference_descriptors_, config_.ratio)) {
+    const cv::Point3f& p = reference_points_[match.trainIdx];
     object_points.push_back(p);
     plane_points.emplace_back(p.x, p.y);
-    image_points.push_back(window_positions[pair[0].queryIdx] + offset);
+    image_points.push_back(window_positions[match.queryIdx] + offset);
   }
   if (static_cast<int>(image_points.size()) < config_.min_inliers) return std::nullopt;
 

@@ -4,7 +4,6 @@
 // Thin wiring around ColourBlobDetector and BeaconController; CommandOutput adds limits, the
 // frame watchdog and the final stop. Thresholds and gains are ~params, also live through
 // dynamic_reconfigure (cfg/BeaconChaser.cfg).
-#include <cmath>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -120,14 +119,7 @@ BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
   }
   controller.target.shape = *parsed_shape;
   controller.target.size_m = positiveParam(pnh, "target_size", controller.target.size_m);
-  controller.camera.height_m = positiveParam(pnh, "camera_height", controller.camera.height_m);
-  const double pitch_deg = checkedParam(
-      pnh, "camera_pitch_deg", 0.0, [](double v) { return std::isfinite(v) && std::abs(v) < 89.0; },
-      "within (-89, 89)");
-  controller.camera.pitch_rad = pitch_deg * M_PI / 180.0;
-  controller.camera.x_offset_m = checkedParam(
-      pnh, "camera_x_offset", controller.camera.x_offset_m,
-      [](double v) { return std::isfinite(v); }, "finite");
+  controller.camera = readCameraMounting(pnh, controller.camera);
   return controller;
 }
 

@@ -3,7 +3,6 @@
 // Thin wiring around LineDetector (band-only HSV threshold + moments) and LineController
 // (lecture law or PD with line search); CommandOutput adds limits, the frame watchdog and the
 // final stop. Thresholds and gains are ~params, also live through dynamic_reconfigure.
-#include <cmath>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -91,22 +90,6 @@ Settings coreSettings(const FollowerConfig& cfg) {
   return settings;
 }
 
-// Mounting from ~camera_height (m), ~camera_pitch_deg (deg, down positive), ~camera_x_offset (m);
-// intrinsics arrive later with camera_info.
-CameraGeometry readMounting(const ros::NodeHandle& pnh) {
-  CameraGeometry camera;
-  camera.height_m = positiveParam(pnh, "camera_height", camera.height_m);
-  double pitch_deg = camera.pitch_rad * 180.0 / M_PI;
-  pitch_deg = checkedParam(
-      pnh, "camera_pitch_deg", pitch_deg,
-      [](double v) { return std::isfinite(v) && std::abs(v) < 89.0; }, "within (-89, 89)");
-  camera.pitch_rad = pitch_deg * M_PI / 180.0;
-  camera.x_offset_m = checkedParam(
-      pnh, "camera_x_offset", camera.x_offset_m, [](double v) { return std::isfinite(v); },
-      "finite");
-  return camera;
-}
-
 }  // namespace
 
 class FollowerNodelet : public nodelet::Nodelet {
@@ -118,7 +101,7 @@ class FollowerNodelet : public nodelet::Nodelet {
     FollowerConfig cfg = FollowerConfig::__getDefault__();
     cfg.__fromServer__(pnh);
     apply(coreSettings(cfg));  // throws on bad ~params
-    camera_ = readMounting(pnh);
+    camera_ = readCameraMounting(pnh);
     output_ = std::make_unique<CommandOutput>(nh, pnh);
     camera_info_sub_ = nh.subscribe("camera_info", 1, &FollowerNodelet::onCameraInfo, this);
     pnh.param("use_odom", use_odom_, false);

@@ -38,13 +38,6 @@ namespace follow_bot {
 
 namespace {
 
-template <typename T>
-T param(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
-  T value = fallback;
-  pnh.param(name, value, fallback);
-  return value;
-}
-
 constexpr double kDegToRad = M_PI / 180.0;
 
 // ~target and its detector's ~params; throws std::invalid_argument.
@@ -92,9 +85,9 @@ ParkingServoConfig readServoConfig(const ros::NodeHandle& pnh) {
   config.position_tolerance = param(pnh, "position_tolerance", config.position_tolerance);
   config.lateral_tolerance = param(pnh, "lateral_tolerance", config.lateral_tolerance);
   config.heading_tolerance_rad = param(pnh, "heading_tolerance_deg", 0.5) * kDegToRad;
-  config.camera.height_m = param(pnh, "camera_height", config.camera.height_m);
-  config.camera.pitch_rad = param(pnh, "camera_pitch_deg", 0.0) * kDegToRad;
-  config.camera.x_offset_m = param(pnh, "camera_x_offset", config.camera.x_offset_m);
+  CameraGeometry level = config.camera;  // ~camera_pitch_deg defaults to 0
+  level.pitch_rad = 0.0;
+  config.camera = readCameraMounting(pnh, level);
   const std::string error = validate(config);
   if (!error.empty()) throw std::invalid_argument("~servo parameters: " + error);
   return config;

@@ -89,6 +89,20 @@ class Camera:
         r_cw = r_wc.T
         return r_cw, -r_cw @ position
 
+    def marker_pose(
+        self, pose: tuple[float, float, float], marker_pose: tuple[float, float, float, float]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(R, t) of a marker's frame in the optical frame, as a marker detector reports it.
+
+        The marker frame has x right, y down, z into the board (seen from the front); the marker
+        has world pose (x, y, z, yaw), yaw being the direction its front faces.
+        """
+        x, y, z, yaw = marker_pose
+        r, t = self.world_to_camera(pose)
+        right = [-math.sin(yaw), math.cos(yaw), 0.0]
+        axes = np.column_stack([right, [0.0, 0.0, -1.0], [-math.cos(yaw), -math.sin(yaw), 0.0]])
+        return r @ axes, r @ np.array([x, y, z]) + t
+
     def to_camera(self, points_world: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
         """Transform Nx3 world points into the optical frame."""
         r, t = self.world_to_camera(pose)

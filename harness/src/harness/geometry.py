@@ -23,6 +23,18 @@ def rot_z(yaw: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def rotation_angle_deg(a: np.ndarray, b: np.ndarray) -> float:
+    """Angle of the rotation taking rotation matrix a to b, in degrees."""
+    return math.degrees(math.acos(np.clip((np.trace(a.T @ b) - 1.0) / 2.0, -1.0, 1.0)))
+
+
+def incidence_deg(marker_rotation: np.ndarray, marker_centre: np.ndarray) -> float:
+    """Angle between the line of sight to a marker's centre and the marker's normal (its z axis),
+    both in the camera frame, in degrees (0: seen face-on)."""
+    cos = abs(marker_rotation[:, 2] @ marker_centre) / np.linalg.norm(marker_centre)
+    return math.degrees(math.acos(min(1.0, cos)))
+
+
 @dataclass(frozen=True)
 class Straight:
     """Straight piece of a traced path, in metres."""

@@ -51,6 +51,11 @@ cv::Ptr<cv::Feature2D> createDetector(const MatchOptions& options);
 // otherwise the reason, naming the image by `label`.
 std::string checkImage(const cv::Mat& image, const std::string& label, double min_contrast);
 
+// Lowe's ratio test: for each query descriptor its nearest train descriptor, kept only when
+// closer than `ratio` times the second nearest (an unambiguous match).
+std::vector<cv::DMatch> ratioTestMatches(const cv::DescriptorMatcher& matcher, const cv::Mat& query,
+                                         const cv::Mat& train, double ratio);
+
 // Matches image B against image A (8-bit grey, BGR or BGRA). Never throws on bad input: the
 // result carries the error (blank image, too few features or inliers, degenerate homography).
 PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& options);

@@ -114,6 +114,19 @@ cv::Point2d applyHomography(const cv::Matx33d& h, const cv::Point2d& p) {
   return {q[0] / q[2], q[1] / q[2]};
 }
 
+std::vector<cv::DMatch> ratioTestMatches(const cv::DescriptorMatcher& matcher, const cv::Mat& query,
+                                         const cv::Mat& train, double ratio) {
+  std::vector<std::vector<cv::DMatch>> candidates;
+  matcher.knnMatch(query, train, candidates, 2);
+  std::vector<cv::DMatch> matches;
+  for (const std::vector<cv::DMatch>& pair : candidates) {
+    if (pair.size() == 2 && pair[0].distance < ratio * pair[1].distance) {
+      matches.push_back(pair[0]);
+    }
+  }
+  return matches;
+}
+
 PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& options) {
   PairMatch result;
   result.error = validate(options);
@@ -138,13 +151,11 @@ PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& opti
 
   const int norm = options.detector == Detector::kSift ? cv::NORM_L2 : cv::NORM_HAMMING;
   cv::BFMatcher matcher(norm);
-  std::vector<std::vector<cv::DMatch>> candidates;
-  matcher.knnMatch(descriptors_b, descriptors_a, candidates, 2);
   std::vector<cv::Point2f> points_a, points_b;
-  for (const std::vector<cv::DMatch>& pair : candidates) {
-    if (pair.size() < 2 || pair[0].distance >= options.ratio * pair[1].distance) continue;
-    points_b.push_back(keypoints_b[pair[0].queryIdx].pt);
-    points_a.push_back(keypoints_a[pair[0].trainIdx].pt);
+  for (const cv::DMatch& match :
+       ratioTestMatches(matcher, descriptors_b, descriptors_a, options.ratio)) {
+    points_b.push_back(keypoints_b[match.queryIdx].pt);
+    points_a.push_back(keypoints_a[match.trainIdx].pt);
   }
   result.matches = static_cast<int>(points_a.size());
   if (result.matches < options.min_inliers) {

@@ -28,6 +28,7 @@
 #include "image_converter/panorama_capture.h"
 #include "image_converter/panorama_nodelet.h"
 #include "image_converter/ros/frame_msg.h"
+#include "image_converter/ros/params.h"
 #include "image_converter/stitching.h"
 #include "image_converter/velocity_limiter.h"
 
@@ -38,13 +39,6 @@ namespace {
 constexpr double kPi = 3.141592653589793;
 
 enum class StitchMethod { kAuto, kFeatures, kRotation };
-
-template <typename T>
-T param(const ros::NodeHandle& pnh, const std::string& name, T fallback) {
-  T value = fallback;
-  pnh.param(name, value, fallback);
-  return value;
-}
 
 void throwIfError(const std::string& what, const std::string& error) {
   if (!error.empty()) throw std::invalid_argument(what + ": " + error);
