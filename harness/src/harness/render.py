@@ -319,7 +319,7 @@ _QUAD = ((-1, -1), (1, -1), (1, 1), (-1, 1))
 
 
 def _tag_board(marker: AprilTagMarker) -> tuple[np.ndarray, float]:
-    """Finest board bitmap (white margin + library tag) and its physical edge in metres."""
+    """Finest board bitmap (grey: white margin + library tag) and its physical edge in metres."""
     _, total, border = family_geometry(marker.family)
     first = (total - border) // 2
     bits = tag_image(marker.family, marker.tag_id)[first : first + border, first : first + border]
@@ -327,7 +327,7 @@ def _tag_board(marker: AprilTagMarker) -> tuple[np.ndarray, float]:
     px_per_m = border * TAG_PX_PER_CELL / marker.size
     margin_px = round(marker.margin * px_per_m)
     board = cv2.copyMakeBorder(square, *[margin_px] * 4, cv2.BORDER_CONSTANT, value=255)
-    return cv2.cvtColor(board, cv2.COLOR_GRAY2BGR), board.shape[1] / px_per_m
+    return board, board.shape[1] / px_per_m
 
 
 def _marker_geometry(marker: AprilTagMarker | TextureMarker) -> _MarkerGeometry:
@@ -408,6 +408,8 @@ class _MarkerItem:
         )
         if ss > 1:
             warped = cv2.resize(warped, size, interpolation=cv2.INTER_AREA)
+        if warped.ndim == 2:  # tag boards are grey: warping one channel is a third of the work
+            warped = cv2.cvtColor(warped, cv2.COLOR_GRAY2BGR)
         mask = np.zeros((size[1], size[0]), np.uint8)
         pts = np.rint((uv - [u0, v0]) * 16).astype(np.int32)
         cv2.fillConvexPoly(mask, pts, 255, cv2.LINE_AA, 4)
