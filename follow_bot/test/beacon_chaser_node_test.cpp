@@ -116,16 +116,7 @@ class BeaconChaserNode : public ::testing::Test {
 
 TEST_F(BeaconChaserNode, MalformedFramesAreDroppedAndEveryGoodFrameGetsOneTwist) {
   const sensor_msgs::Image good = frame(floorWithBall(kGreen));
-  std::vector<sensor_msgs::Image> bad(6, good);
-  bad[0].encoding = "bayer_rggb8";  // unknown to the node's BGR view
-  bad[1].encoding = "32FC1";
-  bad[2].step = good.width * 3 - 1;          // wrong step
-  bad[3].data.resize(good.data.size() / 2);  // truncated data
-  bad[4].width = 0;                          // empty image
-  bad[4].height = 0;
-  bad[4].step = 0;
-  bad[4].data.clear();
-  bad[5].height = 0xFFFFFFFFu;
+  const std::vector<sensor_msgs::Image> bad = follow_bot::test::malformedFrames(good);
   for (std::size_t i = 0; i < bad.size(); ++i) {
     for (const auto& reply : send(follow_, bad[i])) {
       EXPECT_TRUE(isZero(reply)) << "bad frame " << i << ": only the watchdog's stop may answer";

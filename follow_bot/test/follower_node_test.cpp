@@ -91,13 +91,7 @@ TEST_F(FollowerNode, DefinedAnswersForFramesWithoutALine) {
 
 TEST_F(FollowerNode, MalformedFramesNeverProduceMotionAndTheNodeSurvives) {
   const sensor_msgs::Image good = frame(floorWithLine(320));
-  std::vector<sensor_msgs::Image> bad(6, good);
-  bad[0].width = 0;
-  bad[1].step = good.width * 3 - 1;
-  bad[2].data.resize(good.data.size() / 2);
-  bad[3].encoding = "32FC1";
-  bad[4].encoding = "bayer_rggb8";
-  bad[5].height = 0xFFFFFFFFu;
+  const std::vector<sensor_msgs::Image> bad = follow_bot::test::malformedFrames(good);
   for (const auto& msg : bad) {
     for (const auto& reply : send(msg, 0.1)) {
       // Only the watchdog may speak here, and it only ever says stop.
