@@ -6,8 +6,11 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 venv=${FOLLOW_BOT_VENV:-$repo/.venv}
 packages=$(grep -v '^#' "$repo/tools/debian-packages.txt" | tr '\n' ' ')
 
-missing=$(dpkg-query -W -f='${db:Status-Status} ${Package}\n' $packages 2>/dev/null |
-  awk '$1 == "installed" {print $2}' | sort | comm -13 - <(tr ' ' '\n' <<<"$packages" | sed '/^$/d' | sort))
+# dpkg-query exits 1 when any listed package is unknown to dpkg (always so on a fresh machine):
+# that is an answer, not a failure, so its exit code is ignored and only its output counts.
+installed=$(dpkg-query -W -f='${db:Status-Status} ${Package}\n' $packages 2>/dev/null || true)
+missing=$(comm -13 <(awk '$1 == "installed" {print $2}' <<<"$installed" | sort) \
+  <(tr ' ' '\n' <<<"$packages" | sed '/^$/d' | sort))
 if [ -n "$missing" ]; then
   echo "deps: installing Debian packages: $missing"
   sudo=""
