@@ -2,7 +2,11 @@
 #include "follow_bot/tag_detector.h"
 
 #include <cmath>
+#include <csignal>
+#include <cstdlib>
 
+#include <apriltag/apriltag.h>
+#include <apriltag/tag36h11.h>
 #include <gtest/gtest.h>
 
 #include "synthetic_tag.h"
@@ -162,6 +166,53 @@ TEST(TagDetector, BadInputGivesNothing) {
   CameraGeometry zero = harnessCamera();
   zero.fx = zero.fy = 0.0;
   EXPECT_FALSE(detector.detect(frameWith(test::viewFrom(1.0, 0, 0)), zero));
+}
+
+TEST(TagDetector, QuadSearchSizeFollowsLibapriltagsDecimation) {
+  EXPECT_EQ(quadSearchSize({640, 480}, 1.0), cv::Size(640, 480));
+  EXPECT_EQ(quadSearchSize({640, 480}, 2.0), cv::Size(320, 240));
+  EXPECT_EQ(quadSearchSize({640, 5}, 2.0), cv::Size(320, 3));
+  EXPECT_EQ(quadSearchSize({640, 4}, 2.0), cv::Size(320, 2));
+  EXPECT_EQ(quadSearchSize({640, 4}, 2.5), cv::Size(320, 2));  // the integer part
+  EXPECT_EQ(quadSearchSize({8, 6}, 1.5), cv::Size(4, 4));
+  EXPECT_EQ(quadSearchSize({2, 5}, 1.5), cv::Size(0, 2));
+  EXPECT_EQ(quadSearchSize({640, 17}, 8.0), cv::Size(80, 3));
+}
+
+// Runs libapriltag itself (quad_decimate 2) on a mid-grey frame of this size.
+void detectWithLibapriltag(int cols, int rows) {
+  cv::Mat gray(rows, cols, CV_8UC1, cv::Scalar(128));
+  apriltag_family_t* family = tag36h11_create();
+  apriltag_detector_t* detector = apriltag_detector_create();
+  apriltag_detector_add_family_bits(detector, family, 0);
+  detector->quad_decimate = 2.0f;
+  image_u8_t image{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]), gray.data};
+  apriltag_detections_destroy(apriltag_detector_detect(detector, &image));
+  apriltag_detector_destroy(detector);
+  tag36h11_destroy(family);
+}
+
+// The library's limit (apriltag 3.3): 3 quad-search rows work, 2 crash it. If a newer
+// libapriltag survives 2, kMinQuadSearchRows can go.
+TEST(TagDetectorDeathTest, LibapriltagCrashesOnTwoQuadSearchRows) {
+  detectWithLibapriltag(640, 5);  // 3 rows: fine
+  EXPECT_EXIT((detectWithLibapriltag(640, 4), std::exit(0)), ::testing::KilledBySignal(SIGSEGV),
+              "");
+}
+
+// Every size around the limit, for every decimation: no crash, and nothing found below it.
+TEST(TagDetector, TinyFramesAtTheQuadSearchLimitGiveNothingAndNoCrash) {
+  for (const double decimate : {1.0, 1.5, 2.0, 2.5, 3.0, 8.0}) {
+    TagDetectorConfig config;
+    config.quad_decimate = decimate;
+    TagDetector detector(config);
+    for (int rows = 1; rows <= 26; ++rows) {
+      for (const int cols : {1, 2, 3, 4, 66, 640}) {
+        const cv::Mat gray(rows, cols, CV_8UC1, cv::Scalar(128));
+        EXPECT_FALSE(detector.detect(gray, harnessCamera())) << cols << "x" << rows;
+      }
+    }
+  }
 }
 
 TEST(TagDetector, RejectsBadConfig) {

@@ -67,6 +67,9 @@ INSTANTIATE_TEST_SUITE_P(
                       MalformedCase{"zero_height", 4, 0, 12, 0, "bgr8", "empty image"},
                       MalformedCase{"short_step", 4, 4, 11, 44, "bgr8", "step 11"},
                       MalformedCase{"short_step_mono16", 4, 4, 4, 16, "mono16", "step 4"},
+                      // cv::Mat throws on a 16-bit row that is not a whole number of values.
+                      MalformedCase{"odd_step_mono16", 8, 4, 17, 68, "mono16",
+                                    "step 17 is not a multiple of 2 bytes"},
                       MalformedCase{"truncated", 4, 4, 12, 47, "bgr8", "data size 47"},
                       MalformedCase{"oversized", 4, 4, 12, 49, "bgr8", "data size 49"},
                       MalformedCase{"absurd", 100000, 2, 300000, 600000, "bgr8",
@@ -104,6 +107,39 @@ TEST(ToBgr8, NormalisesGreyEncodings) {
   EXPECT_EQ(toBgr8(mono8, Encoding::kMono8).at<cv::Vec3b>(1, 2), cv::Vec3b(77, 77, 77));
   EXPECT_EQ(toBgr8(mono16, Encoding::kMono16).at<cv::Vec3b>(1, 2), cv::Vec3b(77, 77, 77));
   EXPECT_EQ(toBgr8(full16, Encoding::kMono16).at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));
+}
+
+TEST(CheckFrame, PaddedMono16RowsAndEveryStampAreAccepted) {
+  const std::vector<std::uint8_t> data(4 * 18, 0);
+  RawFrame frame = frameOf(data, 8, 4, 18, "mono16");  // one 2-byte value of padding per row
+  frame.stamp_sec = 0xFFFFFFFFu;
+  frame.stamp_nsec = 999999999u;
+  EXPECT_TRUE(checkFrame(frame).ok()) << checkFrame(frame).error;
+  frame.stamp_nsec = 1000000000u;
+  EXPECT_NE(checkFrame(frame).error.find("nanoseconds 1000000000"), std::string::npos);
+}
+
+TEST(FrameToBgr8, SwapsBigEndianMono16) {
+  // Two rows of 2 pixels (one 2-byte pad per row): 0x4D01 and 0xFF00 big-endian, i.e. 77, 255.
+  const std::vector<std::uint8_t> data = {0x4D, 0x01, 0xFF, 0x00, 0, 0,
+                                          0x4D, 0x01, 0xFF, 0x00, 0, 0};
+  RawFrame frame = frameOf(data, 2, 2, 6, "mono16");
+  frame.big_endian = true;
+  ASSERT_TRUE(checkFrame(frame).ok());
+  const cv::Mat bgr = frameToBgr8(frame, Encoding::kMono16);
+  ASSERT_EQ(bgr.type(), CV_8UC3);
+  EXPECT_EQ(bgr.at<cv::Vec3b>(1, 0), cv::Vec3b(77, 77, 77));
+  EXPECT_EQ(bgr.at<cv::Vec3b>(1, 1), cv::Vec3b(255, 255, 255));
+  frame.big_endian = false;  // the same bytes little-endian: 0x014D and 0x00FF
+  EXPECT_EQ(frameToBgr8(frame, Encoding::kMono16).at<cv::Vec3b>(0, 0), cv::Vec3b(1, 1, 1));
+  EXPECT_EQ(frameToBgr8(frame, Encoding::kMono16).at<cv::Vec3b>(0, 1), cv::Vec3b(1, 1, 1));
+}
+
+TEST(FrameToBgr8, ByteOrderDoesNotMatterForEightBitData) {
+  const std::vector<std::uint8_t> data = {10, 20, 30, 10, 20, 30};
+  RawFrame frame = frameOf(data, 2, 1, 6, "bgr8");
+  frame.big_endian = true;
+  EXPECT_EQ(frameToBgr8(frame, Encoding::kBgr8).at<cv::Vec3b>(0, 1), cv::Vec3b(10, 20, 30));
 }
 
 TEST(ToBgr8, AlwaysReturnsAFreshBuffer) {

@@ -39,6 +39,13 @@ struct TagDetectorConfig {
 // Empty when usable, otherwise a message naming the first bad field.
 std::string validate(const TagDetectorConfig& config);
 
+// The size of the image libapriltag 3.3 runs its quad search on (image_u8_decimate: 1.5 is a
+// special 2/3 scale, any other decimate > 1 its integer part, 1 + (n - 1) / factor pixels).
+cv::Size quadSearchSize(cv::Size image, double quad_decimate);
+// apriltag_quad_thresh reads outside a quad-search image with fewer rows than this, or no
+// column, and crashes (SIGSEGV); detect() returns no tag for such frames instead.
+constexpr int kMinQuadSearchRows = 3;
+
 class TagDetector : public MarkerDetector {
  public:
   // Throws std::invalid_argument for an invalid config or an unknown family.

@@ -163,9 +163,18 @@ TagDetector::~TagDetector() = default;
 
 void TagDetector::reset() { previous_rotation_.reset(); }
 
+cv::Size quadSearchSize(cv::Size image, double quad_decimate) {
+  if (quad_decimate == 1.5) return {image.width / 3 * 2, image.height / 3 * 2};
+  const int factor = static_cast<int>(quad_decimate);
+  if (factor <= 1) return image;
+  return {1 + (image.width - 1) / factor, 1 + (image.height - 1) / factor};
+}
+
 std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
                                                      const CameraGeometry& camera) {
   if (gray.empty() || gray.type() != CV_8UC1 || !validate(camera).empty()) return std::nullopt;
+  const cv::Size searched = quadSearchSize(gray.size(), config_.quad_decimate);
+  if (searched.height < kMinQuadSearchRows || searched.width < 1) return std::nullopt;
   // apriltag reads the pixels in place; it never writes to its input image.
   image_u8_t image{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]),
                    const_cast<uint8_t*>(gray.ptr<uint8_t>())};

@@ -171,7 +171,12 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
   }
 
   // Ranges need the intrinsics; the controller is rebuilt when they change.
+  // Every callback runs guarded: an exception drops the message, never the node.
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
+  }
+
+  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     bool changed = false;
     const std::string error = updateIntrinsics(*info, settings_.controller.camera, changed);
@@ -186,6 +191,10 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
+    guardedCallback("image", [&] { handleImage(msg); });
+  }
+
+  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     std::string error;
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);

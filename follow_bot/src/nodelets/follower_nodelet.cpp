@@ -138,7 +138,12 @@ class FollowerNodelet : public nodelet::Nodelet {
     }
   }
 
+  // Every callback runs guarded: an exception drops the message, never the node.
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
+  }
+
+  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     bool changed = false;
     const std::string error = updateIntrinsics(*info, camera_, changed);
@@ -155,6 +160,10 @@ class FollowerNodelet : public nodelet::Nodelet {
   // The base's measured motion: better than the commands for path mode's memory whenever the
   // base lags or slips.
   void onOdometry(const nav_msgs::OdometryConstPtr& odom) {
+    guardedCallback("odom", [&] { handleOdometry(odom); });
+  }
+
+  void handleOdometry(const nav_msgs::OdometryConstPtr& odom) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     odom_twist_ = Twist2D{odom->twist.twist.linear.x, odom->twist.twist.angular.z};
     has_odom_ = true;
@@ -181,6 +190,10 @@ class FollowerNodelet : public nodelet::Nodelet {
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
+    guardedCallback("image", [&] { handleImage(msg); });
+  }
+
+  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     std::string error;
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);

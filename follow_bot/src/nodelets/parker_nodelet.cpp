@@ -119,7 +119,12 @@ class ParkerNodelet : public nodelet::Nodelet {
     NODELET_INFO("parking in front of the %s at %.2f m", target_.c_str(), servo_config.standoff_m);
   }
 
+  // Every callback runs guarded: an exception drops the message, never the node.
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
+  }
+
+  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
     std::lock_guard<std::mutex> lock(mutex_);
     bool changed = false;  // the intrinsics are copied on every message either way
     const std::string error = updateIntrinsics(*info, camera_, changed);
@@ -132,6 +137,10 @@ class ParkerNodelet : public nodelet::Nodelet {
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
+    guardedCallback("image", [&] { handleImage(msg); });
+  }
+
+  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
     std::lock_guard<std::mutex> lock(mutex_);
     std::string error;
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);

@@ -1,12 +1,16 @@
 #include "follow_bot/ros/command_output.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <geometry_msgs/Twist.h>
 
 #include "follow_bot/ros/params.h"
+#include "image_converter/ros/frame_msg.h"
 
 namespace follow_bot {
+
+using image_converter::guardedCallback;
 
 namespace {
 VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse) {
@@ -40,7 +44,13 @@ void CommandOutput::frameArrived() {
 }
 
 Twist2D CommandOutput::send(const Twist2D& desired, const ros::Time& stamp) {
-  const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
+  // In double seconds: ros::Time's difference throws beyond 2^31 s, and stamps are input.
+  // A gap longer than the watchdog timeout counts as the timeout: the robot cannot have been
+  // moving longer than that on the last command, so acceleration stays bounded whatever the
+  // stamps say (a backward stamp gives dt <= 0: the limiter then only slows down).
+  const double dt = last_stamp_.isZero()
+                        ? 0.0
+                        : std::min(stamp.toSec() - last_stamp_.toSec(), watchdog_.timeout());
   last_stamp_ = stamp;
   const Twist2D command = limiter_.limit(desired, dt);
   publish(command);
@@ -60,6 +70,10 @@ void CommandOutput::publish(const Twist2D& command) {
 }
 
 void CommandOutput::checkWatchdog(const ros::TimerEvent&) {
+  guardedCallback("watchdog", [this] { checkWatchdogNow(); });
+}
+
+void CommandOutput::checkWatchdogNow() {
   const double now = ros::Time::now().toSec();
   // Frames handled since the last check prove the camera is alive whatever the clock says: under
   // load the /clock thread can lag the image callbacks, so frames get stamped with a stale time.

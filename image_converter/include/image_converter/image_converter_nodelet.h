@@ -22,6 +22,7 @@ class ImageConverterNodelet : public nodelet::Nodelet {
   void updateSubscription();
   void subscribe();
   void onImage(const sensor_msgs::ImageConstPtr& msg);
+  void handleImage(const sensor_msgs::ImageConstPtr& msg);
 
   OverlayConfig overlay_;
   bool display_ = false;

@@ -33,9 +33,12 @@ struct RawFrame {
   std::uint32_t width = 0;
   std::uint32_t height = 0;
   std::string encoding;
-  std::uint32_t step = 0;  // bytes per row
+  bool big_endian = false;  // byte order of multi-byte pixel values
+  std::uint32_t step = 0;   // bytes per row
   const std::uint8_t* data = nullptr;
   std::size_t data_size = 0;
+  std::uint32_t stamp_sec = 0;  // header stamp as sent; stamp_nsec must be < 10^9
+  std::uint32_t stamp_nsec = 0;
 };
 
 // Result of validating a RawFrame: either the parsed encoding, or a message naming the problem.
@@ -45,11 +48,21 @@ struct FrameCheck {
   bool ok() const { return error.empty(); }
 };
 
-// Checks encoding, dimensions, step and buffer size. Never reads the pixel data.
+// The one acceptance test every node applies before touching a frame's pixels: a supported
+// encoding, non-empty dimensions within kMaxDimension, a step of at least width x bytes per
+// pixel and a whole number of channel values (cv::Mat requires it: an odd mono16 step would
+// throw), data size = height x step, and a header stamp whose nanoseconds are < 10^9. Either
+// byte order is accepted (frameToBgr8 swaps big-endian mono16). Never reads the pixel data.
 FrameCheck checkFrame(const RawFrame& frame);
+
+// A cv::Mat header over a checked frame's buffer (no copy; valid while the buffer lives).
+cv::Mat wrapFrame(const RawFrame& frame, Encoding encoding);
 
 // Converts a frame in any supported encoding into a new BGR8 image (always a fresh buffer, so
 // the caller may draw on it). mono16 is scaled to 8 bits as value / 256, rounded and saturated.
 cv::Mat toBgr8(const cv::Mat& image, Encoding encoding);
+
+// toBgr8 of a checked frame, in either byte order.
+cv::Mat frameToBgr8(const RawFrame& frame, Encoding encoding);
 
 }  // namespace image_converter

@@ -65,6 +65,13 @@ FrameCheck checkFrame(const RawFrame& frame) {
                    frame.encoding;
     return result;
   }
+  // cv::Mat asserts step % (bytes per channel value) == 0; padding must keep values aligned.
+  const int value_bytes = CV_ELEM_SIZE1(cvType(*result.encoding));
+  if (frame.step % value_bytes != 0) {
+    result.error = "step " + std::to_string(frame.step) + " is not a multiple of " +
+                   std::to_string(value_bytes) + " bytes (one " + frame.encoding + " value)";
+    return result;
+  }
   const std::uint64_t expected_size = static_cast<std::uint64_t>(frame.height) * frame.step;
   if (frame.data_size != expected_size) {
     result.error = "data size " + std::to_string(frame.data_size) + " != height x step (" +
@@ -73,8 +80,29 @@ FrameCheck checkFrame(const RawFrame& frame) {
   }
   if (frame.data == nullptr) {
     result.error = "no pixel buffer";
+    return result;
+  }
+  if (frame.stamp_nsec >= 1000000000u) {
+    result.error = "header stamp nanoseconds " + std::to_string(frame.stamp_nsec) + " >= 10^9";
   }
   return result;
+}
+
+cv::Mat wrapFrame(const RawFrame& frame, Encoding encoding) {
+  // cv::Mat has no const view; the callers only read through it.
+  return cv::Mat(static_cast<int>(frame.height), static_cast<int>(frame.width), cvType(encoding),
+                 const_cast<std::uint8_t*>(frame.data), frame.step);
+}
+
+cv::Mat frameToBgr8(const RawFrame& frame, Encoding encoding) {
+  const cv::Mat image = wrapFrame(frame, encoding);
+  if (!frame.big_endian || CV_ELEM_SIZE1(image.type()) == 1) return toBgr8(image, encoding);
+  // Big-endian 16-bit values: swap the two bytes of each (cv_bridge would make 2 channels).
+  cv::Mat bytes(image.rows, image.cols, CV_8UC2, image.data, image.step);
+  cv::Mat swapped(image.rows, image.cols, CV_8UC2);
+  const int from_to[] = {0, 1, 1, 0};
+  cv::mixChannels(&bytes, 1, &swapped, 1, from_to, 2);
+  return toBgr8(cv::Mat(image.rows, image.cols, CV_16UC1, swapped.data, swapped.step), encoding);
 }
 
 cv::Mat toBgr8(const cv::Mat& image, Encoding encoding) {

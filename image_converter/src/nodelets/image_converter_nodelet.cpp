@@ -97,22 +97,20 @@ void ImageConverterNodelet::subscribe() {
 }
 
 void ImageConverterNodelet::onImage(const sensor_msgs::ImageConstPtr& msg) {
-  const FrameCheck check = checkFrame(rawFrameOf(*msg));
+  // Guarded: an exception drops the frame (throttled error), never the node.
+  guardedCallback("image", [&] { handleImage(msg); });
+}
+
+void ImageConverterNodelet::handleImage(const sensor_msgs::ImageConstPtr& msg) {
+  const RawFrame raw = rawFrameOf(*msg);
+  const FrameCheck check = checkFrame(raw);
   if (!check.ok()) {
     NODELET_ERROR_THROTTLE(1.0, "dropping frame on %s: %s", input_.getTopic().c_str(),
                            check.error.c_str());
     return;
   }
-  cv_bridge::CvImageConstPtr shared;
-  try {
-    shared = cv_bridge::toCvShare(msg);  // no copy: a view of the message's buffer
-  } catch (const cv_bridge::Exception& error) {
-    NODELET_ERROR_THROTTLE(1.0, "dropping frame on %s: %s", input_.getTopic().c_str(),
-                           error.what());
-    return;
-  }
-  // The one copy: the overlay must not be drawn into a buffer other subscribers share.
-  cv_bridge::CvImage annotated(msg->header, "bgr8", toBgr8(shared->image, *check.encoding));
+  // The one copy (the overlay must not be drawn into a buffer other subscribers share).
+  cv_bridge::CvImage annotated(msg->header, "bgr8", frameToBgr8(raw, *check.encoding));
   drawOverlay(annotated.image, overlay_);
 
   if (output_.getNumSubscribers() > 0) output_.publish(annotated.toImageMsg());

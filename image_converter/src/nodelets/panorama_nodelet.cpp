@@ -5,6 +5,7 @@
 // VelocityLimiter. One camera frame in, one Twist out (zero while idle), so it runs under the
 // lockstep simulator as well as on a robot. The service waits on its own callback queue while
 // the frames drive the capture on the nodelet's queue.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -128,7 +129,12 @@ class PanoramaNodelet : public nodelet::Nodelet {
     }
   }
 
+  // Every callback runs guarded: an exception drops the message, never the node.
   void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
+    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
+  }
+
+  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
     std::lock_guard<std::mutex> lock(mutex_);
     TurningCamera updated = camera_;
     updated.fx = info->K[0];
@@ -145,6 +151,10 @@ class PanoramaNodelet : public nodelet::Nodelet {
   }
 
   void onOdom(const nav_msgs::OdometryConstPtr& odom) {
+    guardedCallback("odom", [&] { handleOdom(odom); });
+  }
+
+  void handleOdom(const nav_msgs::OdometryConstPtr& odom) {
     const double yaw = yawOf(*odom);
     std::lock_guard<std::mutex> lock(mutex_);
     if (std::isfinite(yaw)) yaw_ = yaw;
@@ -173,7 +183,7 @@ class PanoramaNodelet : public nodelet::Nodelet {
       changed_.wait_for(lock, std::chrono::milliseconds(100));
       if (outcome_) break;
       const double silent = ros::WallTime::now().toSec() - last_frame_wall_;
-      const bool timed_out = (ros::Time::now() - started).toSec() > capture_timeout_;
+      const bool timed_out = ros::Time::now().toSec() - started.toSec() > capture_timeout_;
       if (silent > frame_timeout_ || timed_out || !ros::ok()) {
         capture_->abort();
         start_requested_ = false;
@@ -189,24 +199,23 @@ class PanoramaNodelet : public nodelet::Nodelet {
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
+    guardedCallback("image", [&] { handleImage(msg); });
+  }
+
+  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
     std::unique_lock<std::mutex> lock(mutex_);
-    const FrameCheck check = checkFrame(rawFrameOf(*msg));
-    cv_bridge::CvImageConstPtr frame;
-    std::string error = check.error;
-    if (check.ok()) {
-      try {
-        frame = cv_bridge::toCvShare(msg, "bgr8");
-      } catch (const cv_bridge::Exception& exception) {
-        error = exception.what();
-      }
-    }
+    std::string error;
+    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
     if (!frame) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
       return;
     }
     last_frame_wall_ = ros::WallTime::now().toSec();
     const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
-    const double dt = last_stamp_.isZero() ? 0.0 : (stamp - last_stamp_).toSec();
+    // In double seconds (ros::Time's difference throws beyond 2^31 s); a gap longer than
+    // ~frame_timeout counts as that, so acceleration stays bounded whatever the stamps say.
+    const double dt =
+        last_stamp_.isZero() ? 0.0 : std::min(stamp.toSec() - last_stamp_.toSec(), frame_timeout_);
     last_stamp_ = stamp;
 
     if (start_requested_ && yaw_) {
@@ -227,7 +236,12 @@ class PanoramaNodelet : public nodelet::Nodelet {
     if (!step.finished) return;
 
     // Answer this frame first: stitching takes a while and the base should not wait for it.
-    const Outcome outcome = stitchAndPublish(msg->header);
+    Outcome outcome;
+    try {  // the caller must get a reply whatever the stitcher does
+      outcome = stitchAndPublish(msg->header);
+    } catch (const std::exception& error) {
+      outcome = {false, std::string("stitching failed: ") + error.what()};
+    }
     outcome_ = outcome;
     changed_.notify_all();
     if (outcome.success) {

@@ -3,7 +3,6 @@
 
 #include <string>
 
-#include <cv_bridge/cv_bridge.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 
@@ -12,23 +11,9 @@
 
 namespace follow_bot {
 
-// The frame as BGR8 (a view of the message, no copy, when it is bgr8), or null with `error` set
-// for a frame that fails the checks or cannot be converted.
-inline cv_bridge::CvImageConstPtr bgrView(const sensor_msgs::ImageConstPtr& msg,
-                                          std::string& error) {
-  const image_converter::FrameCheck check =
-      image_converter::checkFrame(image_converter::rawFrameOf(*msg));
-  if (!check.ok()) {
-    error = check.error;
-    return nullptr;
-  }
-  try {
-    return cv_bridge::toCvShare(msg, "bgr8");
-  } catch (const cv_bridge::Exception& exception) {
-    error = exception.what();
-    return nullptr;
-  }
-}
+// The project's one frame acceptance (image_converter/ros/frame_msg.h) and callback guard.
+using image_converter::bgrView;
+using image_converter::guardedCallback;
 
 // Copies CameraInfo's K into `camera` when it is usable. Returns "" on success, otherwise why
 // the message was ignored (`camera` then unchanged). `changed` tells whether the intrinsics

@@ -26,7 +26,8 @@ class CommandOutput {
   // Records that a frame arrived now (call it for every received frame, good or not).
   void frameArrived();
   // Limits `desired` (acceleration against the previous send, `stamp` being the frame's time)
-  // and publishes it. Returns what was published.
+  // and publishes it. Returns what was published. Any stamps are safe: the time since the
+  // previous send is taken as at most ~watchdog_timeout, and as none when it runs backwards.
   Twist2D send(const Twist2D& desired, const ros::Time& stamp);
   // Publishes an immediate zero.
   void stop();
@@ -34,6 +35,7 @@ class CommandOutput {
  private:
   void publish(const Twist2D& command);
   void checkWatchdog(const ros::TimerEvent&);
+  void checkWatchdogNow();
 
   ros::Publisher publisher_;
   ros::Timer timer_;

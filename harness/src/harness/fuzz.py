@@ -1,0 +1,601 @@
+"""Seeded fuzzer for the camera nodes: malformed and random frames, CameraInfo and odometry.
+
+Starts a roscore of its own (a free port) and every node under test as its own process, sends
+each node a seeded storm (or the named crash cases), then checks per node that the original
+process is still alive, that a valid frame afterwards gets the right answer, and that every
+Twist it ever published was finite and within the limits. Prints one line of counts per node
+and a JSON summary; exits 1 when any node fails.
+
+    rosrun harness fuzz --messages 10000 --seed 1          # the storm, every node
+    rosrun harness fuzz --cases          # the known killers, each on fresh nodes
+    rosrun harness fuzz --nodes parker_tag parker_sign --messages 500
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from harness.apriltag_image import tag_image
+from harness.run_scenario import free_port, stop, wait_for_port
+
+REPO = Path(__file__).resolve().parents[3]
+SIGN_IMAGE = REPO / "worlds" / "textures" / "parking_sign.png"
+SIGN_WIDTH_M = 0.40
+TAG_SIZE_M = 0.30
+# The shared limits' defaults (README: ~limit_linear, ~limit_angular).
+LIMIT_LINEAR = 0.7
+LIMIT_ANGULAR = math.pi
+# The harness camera: 640x480, 60 deg horizontal field of view.
+WIDTH, HEIGHT = 640, 480
+FX = 554.2562584220408
+MAX_STAMP_SEC = 2**32 - 1
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """How to start one node under test and what its answer to a valid frame must be."""
+
+    package: str
+    executable: str
+    params: dict = field(default_factory=dict)
+    probe: str = "twist"  # which valid frame and answer check (see Probe)
+    capturing: bool = False  # panorama: keep a capture running through the storm
+
+
+NODES: dict[str, NodeSpec] = {
+    "image_converter": NodeSpec("image_converter", "image_converter", probe="overlay"),
+    "follower": NodeSpec("follow_bot", "follower", probe="line"),
+    "beacon_follow": NodeSpec("follow_bot", "beacon_chaser", probe="green"),
+    "beacon_approach": NodeSpec(
+        "follow_bot",
+        "beacon_chaser",
+        {"mode": "approach", "target_shape": "sphere", "target_size": 0.2},
+        probe="green",
+    ),
+    "parker_tag": NodeSpec("follow_bot", "parker", probe="tag"),
+    "parker_sign": NodeSpec(
+        "follow_bot",
+        "parker",
+        {"target": "sign", "sign_image": str(SIGN_IMAGE), "sign_width": SIGN_WIDTH_M},
+        probe="sign",
+    ),
+    "panorama_idle": NodeSpec("image_converter", "panorama", probe="idle"),
+    "panorama_capturing": NodeSpec(
+        "image_converter", "panorama", {"capture_timeout": 3600.0}, probe="turning", capturing=True
+    ),
+}
+
+VALID_ENCODINGS = ["bgr8", "rgb8", "bgra8", "rgba8", "mono8", "mono16", "8UC1", "8UC3"]
+INVALID_ENCODINGS = ["bayer_rggb8", "32FC1", "16UC1", "rgb16", "bgra16", "8UC4", "yuv422", "", "x"]
+BYTES_PER_PIXEL = {"bgr8": 3, "rgb8": 3, "bgra8": 4, "rgba8": 4, "mono8": 1, "mono16": 2}
+BYTES_PER_PIXEL.update({"8UC1": 1, "8UC3": 3})
+
+
+# --- messages -----------------------------------------------------------------------------------
+
+
+def image_msg(width, height, encoding, step, data, stamp=(0, 0), big_endian=0):
+    from sensor_msgs.msg import Image
+
+    msg = Image()
+    msg.header.stamp.secs, msg.header.stamp.nsecs = stamp
+    msg.header.frame_id = "camera_rgb_optical_frame"
+    msg.width, msg.height, msg.encoding, msg.step = width, height, encoding, step
+    msg.is_bigendian = big_endian
+    msg.data = bytes(data)
+    return msg
+
+
+def bgr_msg(bgr: np.ndarray, stamp=(0, 0)):
+    h, w = bgr.shape[:2]
+    return image_msg(w, h, "bgr8", w * 3, np.ascontiguousarray(bgr).tobytes(), stamp)
+
+
+def camera_info_msg(fx=FX, fy=FX, cx=WIDTH / 2, cy=HEIGHT / 2, width=WIDTH, height=HEIGHT):
+    from sensor_msgs.msg import CameraInfo
+
+    info = CameraInfo()
+    info.width, info.height = width, height
+    info.K = [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]
+    info.P = [fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0]
+    info.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+    info.distortion_model = "plumb_bob"
+    info.D = [0.0] * 5
+    return info
+
+
+def odom_msg(yaw=0.0):
+    from nav_msgs.msg import Odometry
+
+    odom = Odometry()
+    odom.pose.pose.orientation.z = math.sin(yaw / 2)
+    odom.pose.pose.orientation.w = math.cos(yaw / 2)
+    return odom
+
+
+def crash_cases() -> dict[str, list]:
+    """The four killers found by the first fuzzing run (issue 12), each a short message list."""
+    line = probe_frame("line")
+    return {
+        # Passes step >= width*2 and data == height*step, but a 16-bit cv::Mat needs an even step.
+        "mono16_odd_step": [image_msg(8, 4, "mono16", 17, bytes(68), (1000, 0))],
+        # cv_bridge turns big-endian 16-bit data into a 2-channel image.
+        "mono16_big_endian": [image_msg(2, 2, "mono16", 4, bytes(8), (1000, 0), big_endian=1)],
+        # Two valid frames stamped more than 2^31 s apart: ros::Duration cannot hold the gap.
+        "stamp_jump": [_restamp(line, (0, 1)), _restamp(line, (MAX_STAMP_SEC, 0))],
+        # libapriltag's quad search reads outside images only a few rows high.
+        "tiny_frames": [
+            bgr_msg(np.full((h, w, 3), 128, np.uint8), (1000, 0))
+            for w, h in [(4, 4), (640, 1), (640, 2), (640, 3), (640, 4), (66, 3), (1, 1), (3, 640)]
+        ],
+    }
+
+
+def _restamp(msg, stamp):
+    msg = image_msg(msg.width, msg.height, msg.encoding, msg.step, msg.data, stamp)
+    return msg
+
+
+class Storm:
+    """A seeded sequence of random Image, CameraInfo and Odometry messages."""
+
+    def __init__(self, seed: int):
+        self.rng = random.Random(seed)
+
+    def stamp(self):
+        r = self.rng
+        choice = r.random()
+        if choice < 0.15:
+            return (0, 0)
+        if choice < 0.25:
+            return (0, 1)
+        if choice < 0.35:
+            return (MAX_STAMP_SEC, r.choice([0, 999_999_999]))
+        if choice < 0.45:
+            return (r.randrange(2**32), r.randrange(2**32))  # nsecs past 1e9 too
+        return (int(time.time()), r.randrange(1_000_000_000))
+
+    def image(self):
+        r = self.rng
+        if r.random() < 0.13:
+            return self.valid_image(), True
+        encoding = r.choice(VALID_ENCODINGS + INVALID_ENCODINGS)
+        bpp = BYTES_PER_PIXEL.get(encoding, r.choice([1, 2, 3, 4, 8]))
+        kind = r.random()
+        if kind < 0.25:  # huge dimensions with short data
+            width = r.choice([0, 1, 2**16, 2**31, 2**32 - 1, r.randrange(2**32)])
+            height = r.choice([0, 1, 2**16, 2**31, 2**32 - 1, r.randrange(2**32)])
+        else:
+            width, height = r.randrange(0, 80), r.randrange(0, 80)
+        step_kind = r.random()
+        if step_kind < 0.4:
+            step = (width * bpp) % 2**32
+        elif step_kind < 0.6:
+            step = (width * bpp + r.choice([-1, 1, 3])) % 2**32
+        else:
+            step = r.randrange(0, 2**32) if r.random() < 0.3 else r.randrange(0, 400)
+        size_kind = r.random()
+        full = height * step
+        if size_kind < 0.5 and full < 200_000:
+            size = full  # consistent sizes reach the deeper checks
+        else:
+            size = r.randrange(0, min(full, 2000) + 1) if full else r.randrange(0, 64)
+        data = r.randbytes(size)
+        return image_msg(width, height, encoding, step, data, self.stamp(), r.randrange(2)), False
+
+    def valid_image(self):
+        r = self.rng
+        encoding = r.choice(VALID_ENCODINGS)
+        bpp = BYTES_PER_PIXEL[encoding]
+        if r.random() < 0.2:
+            width, height = r.randrange(1, 12), r.randrange(1, 12)  # tiny frames
+        else:
+            width, height = r.randrange(1, 200), r.randrange(1, 160)
+        step = width * bpp + r.choice([0, 0, 0, 2, 4])  # padded rows are valid (even: mono16)
+        return image_msg(width, height, encoding, step, r.randbytes(height * step), self.stamp())
+
+    def camera_info(self):
+        r = self.rng
+        special = [0.0, -1.0, float("nan"), float("inf"), -float("inf"), 1e308, 1e-308]
+
+        def value(typical):
+            return r.choice(special) if r.random() < 0.4 else typical * r.uniform(0.01, 3)
+
+        info = camera_info_msg(value(FX), value(FX), value(WIDTH / 2), value(HEIGHT / 2))
+        info.width = r.choice([0, 1, WIDTH, 2**32 - 1, r.randrange(2**32)])
+        info.height = r.choice([0, 1, HEIGHT, 2**32 - 1, r.randrange(2**32)])
+        info.D = [r.choice([*special, 0.1]) for _ in range(r.choice([0, 1, 5, 8, 14, 50]))]
+        info.K = [k if r.random() < 0.8 else r.choice(special) for k in info.K]
+        info.distortion_model = r.choice(["plumb_bob", "rational_polynomial", "", "??"])
+        info.header.stamp.secs, info.header.stamp.nsecs = self.stamp()
+        return info
+
+    def odom(self, random_yaw: bool = True):
+        r = self.rng
+        odom = odom_msg(r.uniform(-4, 4) if random_yaw else 0.0)
+        q = odom.pose.pose.orientation
+        if r.random() < 0.3:
+            garbage = [0.0, float("nan"), float("inf"), 1e300]
+            q.x, q.y, q.z, q.w = (r.choice(garbage) for _ in "xyzw")
+        odom.twist.twist.linear.x = r.choice([0.0, float("nan"), 1e300, r.uniform(-1, 1)])
+        return odom
+
+
+# --- probes: a valid frame and the answer it must get --------------------------------------------
+
+
+def floor(colour=(120, 120, 120)) -> np.ndarray:
+    return np.full((HEIGHT, WIDTH, 3), colour, np.uint8)
+
+
+def probe_frame(probe: str):
+    """The valid frame whose answer proves a node still works."""
+    image = floor()
+    if probe == "line":
+        image[:, WIDTH // 2 - 8 : WIDTH // 2 + 8] = (0, 220, 255)
+    elif probe == "green":
+        cv2.circle(image, (WIDTH // 2, HEIGHT // 2), 40, (0, 200, 0), cv2.FILLED)
+    elif probe == "tag":
+        image = floor((255, 255, 255))
+        tag = tag_image()  # 10x10 cells, 8 of them the black square
+        cell = 12
+        big = cv2.resize(tag, None, fx=cell, fy=cell, interpolation=cv2.INTER_NEAREST)
+        y0, x0 = (HEIGHT - big.shape[0]) // 2, (WIDTH - big.shape[1]) // 2
+        image[y0 : y0 + big.shape[0], x0 : x0 + big.shape[1]] = big[:, :, None]
+    elif probe == "sign":
+        sign = cv2.imread(str(SIGN_IMAGE))
+        sign = cv2.resize(sign, (240, 200), interpolation=cv2.INTER_AREA)
+        y0, x0 = (HEIGHT - 200) // 2, (WIDTH - 240) // 2
+        image[y0 : y0 + 200, x0 : x0 + 240] = sign
+    elif probe == "overlay":
+        image = np.full((64, 64, 3), 90, np.uint8)
+    return bgr_msg(image, (int(time.time()), 0))
+
+
+def expected_range(probe: str) -> float | None:
+    """Marker distance the probe frame shows (fronto-parallel, centred)."""
+    if probe == "tag":
+        return FX * TAG_SIZE_M / (12 * 8)
+    if probe == "sign":
+        return FX * SIGN_WIDTH_M / 240
+    return None
+
+
+# --- the driver ---------------------------------------------------------------------------------
+
+
+class NodeUnderTest:
+    def __init__(self, key: str, spec: NodeSpec, env: dict, log_dir: Path, run: int):
+        import rospy
+        from geometry_msgs.msg import PoseStamped, Twist
+        from nav_msgs.msg import Odometry
+        from sensor_msgs.msg import CameraInfo, Image
+
+        self.key, self.spec = key, spec
+        # A fresh name per run: the master shuts down a same-named node's old address, which a
+        # new process may have been given.
+        self.name = f"fuzz{run}_{key}"
+        ns = f"/fuzz{run}/{key}"
+        args = [f"{k}:={ns}/{k}" for k in ("image", "camera_info", "cmd_vel", "odom")]
+        params = [f"_{k}:={v}" for k, v in spec.params.items()]
+        log_dir.mkdir(parents=True, exist_ok=True)
+        self.log = open(log_dir / f"{key}.log", "w")  # noqa: SIM115 (closed in finish)
+        self.process = subprocess.Popen(
+            ["rosrun", spec.package, spec.executable, f"__name:={self.name}", *args, *params],
+            env=env, stdout=self.log, stderr=subprocess.STDOUT,
+        )  # fmt: skip
+        self.lock = threading.Lock()
+        self.twists = 0
+        self.non_finite = 0
+        self.over_limit = 0
+        self.answers: list = []
+        self.image_pub = rospy.Publisher(f"{ns}/image", Image, queue_size=1, tcp_nodelay=True)
+        self.info_pub = rospy.Publisher(f"{ns}/camera_info", CameraInfo, queue_size=1)
+        self.odom_pub = rospy.Publisher(f"{ns}/odom", Odometry, queue_size=1)
+        self.subs = []
+        if spec.probe == "overlay":
+            topic = f"/{self.name}/output"
+            self.subs.append(rospy.Subscriber(topic, Image, self._on_answer, tcp_nodelay=True))
+        else:
+            twists = rospy.Subscriber(f"{ns}/cmd_vel", Twist, self._on_twist, tcp_nodelay=True)
+            self.subs.append(twists)
+        if spec.probe in ("tag", "sign"):
+            topic = f"/{self.name}/target_pose"
+            self.subs.append(rospy.Subscriber(topic, PoseStamped, self._on_answer))
+        if spec.probe == "line":
+            from follow_bot.msg import LineStatus
+
+            self.subs.append(rospy.Subscriber(f"/{self.name}/line", LineStatus, self._on_answer))
+        if spec.probe == "green":
+            from follow_bot.msg import BeaconDetections
+
+            topic = f"/{self.name}/detections"
+            self.subs.append(rospy.Subscriber(topic, BeaconDetections, self._on_answer))
+        self.capture_reply = None
+        self.sent = {"image": 0, "valid_image": 0, "camera_info": 0, "odom": 0}
+
+    def _on_twist(self, msg):
+        values = [msg.linear.x, msg.linear.y, msg.linear.z, msg.angular.x, msg.angular.y]
+        values.append(msg.angular.z)
+        with self.lock:
+            self.twists += 1
+            if not all(math.isfinite(v) for v in values):
+                self.non_finite += 1
+            elif (
+                abs(msg.linear.x) > LIMIT_LINEAR
+                or abs(msg.angular.z) > LIMIT_ANGULAR
+                or any(values[1:5])
+            ):
+                self.over_limit += 1
+            if self.spec.probe in ("twist", "idle", "turning"):
+                self.answers.append(msg)
+
+    def _on_answer(self, msg):
+        with self.lock:
+            self.answers.append(msg)
+
+    def wait_connected(self, timeout: float) -> bool:
+        deadline = time.monotonic() + timeout
+        pubs = [self.image_pub]
+        while time.monotonic() < deadline:
+            alive = self.process.poll() is None
+            if not alive:
+                return False
+            if all(p.get_num_connections() > 0 for p in pubs) and all(
+                s.get_num_connections() > 0 for s in self.subs
+            ):
+                return True
+            time.sleep(0.05)
+        return False
+
+    def prepare(self):
+        """Intrinsics and a pose; a capture running in the background when asked."""
+        self.info_pub.publish(camera_info_msg())
+        self.odom_pub.publish(odom_msg())
+        time.sleep(0.1)
+        if self.spec.capturing:
+            self.start_capture()
+
+    def start_capture(self):
+        import rospy
+        from std_srvs.srv import Trigger
+
+        service = f"/{self.name}/capture"
+        rospy.wait_for_service(service, timeout=20)
+        frame = probe_frame("idle")
+        for _ in range(3):
+            self.image_pub.publish(frame)
+            time.sleep(0.05)
+
+        def call():
+            try:
+                self.capture_reply = rospy.ServiceProxy(service, Trigger)()
+            except Exception as error:  # the node going away mid-call is reported elsewhere
+                self.capture_reply = error
+
+        threading.Thread(target=call, daemon=True).start()
+        time.sleep(0.2)
+
+    def keep_capturing(self):
+        """A valid frame for a capturing node: invalid ones do not count against the frame
+        timeout (~frame_timeout, 1 s) that would end the capture."""
+        if self.spec.capturing:
+            self.image_pub.publish(probe_frame("idle"))
+            time.sleep(0.05)
+
+    def send(self, msg, kind: str, pause: float):
+        pub = {"image": self.image_pub, "camera_info": self.info_pub, "odom": self.odom_pub}[
+            "image" if kind == "valid_image" else kind
+        ]
+        pub.publish(msg)
+        self.sent[kind] += 1
+        if pause:
+            time.sleep(pause)
+
+    def probe(self) -> str:
+        """Empty when a valid frame gets the right answer, else what went wrong."""
+        self.info_pub.publish(camera_info_msg())
+        self.odom_pub.publish(odom_msg())
+        time.sleep(0.2)
+        probe = self.spec.probe
+        error = "no answer"
+        for _ in range(5):  # the first answers may still be the watchdog's stop
+            with self.lock:
+                self.answers.clear()
+            self.image_pub.publish(probe_frame(probe))
+            deadline = time.monotonic() + 3.0
+            while time.monotonic() < deadline:
+                with self.lock:
+                    answers = list(self.answers)
+                if answers:
+                    time.sleep(0.05)
+                    with self.lock:
+                        answers = list(self.answers)
+                    error = check_answer(probe, answers)
+                    break
+                time.sleep(0.01)
+            if not error:
+                return ""
+            time.sleep(0.05)
+        return error
+
+    def finish(self) -> dict:
+        alive = self.process.poll() is None
+        code = self.process.returncode
+        probe_error = self.probe() if alive else "process died"
+        alive = alive and self.process.poll() is None
+        stop(self.process)
+        self.log.close()
+        with self.lock:
+            return {
+                "node": self.key,
+                "messages": sum(self.sent.values()),
+                **self.sent,
+                "alive": alive,
+                "exit_code": None if alive else code,
+                "crashes": 0 if alive else 1,
+                "probe": probe_error or "ok",
+                "twists": self.twists,
+                "non_finite": self.non_finite,
+                "over_limit": self.over_limit,
+            }
+
+
+def check_answer(probe: str, answers: list) -> str:
+    last = answers[-1]
+    if probe == "overlay":
+        from harness.ros_image import msg_to_bgr
+
+        image = msg_to_bgr(last)
+        # The red circle (radius 25) crosses the centre row 25 px right of the centre.
+        if image.shape != (64, 64, 3) or tuple(image[32, 57]) != (0, 0, 255):
+            return f"overlay wrong: {image.shape} {image[32, 57] if image.ndim == 3 else ''}"
+        if tuple(image[32, 32]) != (90, 90, 90):
+            return "overlay changed the centre pixel"
+        return ""
+    if probe == "line":
+        if not last.found or abs(last.centroid_x - WIDTH / 2) > 1.0:
+            return f"line at {last.centroid_x} found={last.found}, expected {WIDTH / 2}"
+        return ""
+    if probe == "green":
+        green = [d for d in last.detections if d.colour == "green"]
+        if not green or not green[0].found or abs(green[0].centroid_x - WIDTH / 2) > 2:
+            return f"green beacon not found at the centre: {green}"
+        return ""
+    if probe in ("tag", "sign"):
+        z = last.pose.position.z
+        expected = expected_range(probe)
+        if abs(z - expected) > 0.05 * expected or abs(last.pose.position.x) > 0.05:
+            return f"marker at z={z:.3f} x={last.pose.position.x:.3f}, expected z={expected:.3f}"
+        return ""
+    if probe == "idle":
+        if any(t.linear.x != 0.0 or t.angular.z != 0.0 for t in answers):
+            return f"idle panorama moved: {answers[-1]}"
+        return ""
+    if probe == "turning":
+        if not last.angular.z > 0.0:
+            return f"capturing panorama not turning toward the left end: {last.angular.z}"
+        return ""
+    return f"unknown probe {probe}"
+
+
+def run(keys, messages, seed, cases, log_dir: Path, pause: float) -> list[dict]:
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
+    env.pop("ROS_NAMESPACE", None)
+    os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"])
+    log_dir.mkdir(parents=True, exist_ok=True)
+    master = subprocess.Popen(
+        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
+        stderr=subprocess.STDOUT,
+    )  # fmt: skip
+    results = []
+    try:
+        if not wait_for_port(port, 20.0):
+            raise RuntimeError("roscore did not start")
+        import rospy
+
+        rospy.init_node("fuzzer", anonymous=True, disable_signals=True)
+        batches = (
+            [(case, msgs) for case, msgs in crash_cases().items()] if cases else [("storm", None)]
+        )
+        for run_index, (case, case_msgs) in enumerate(batches):
+            nodes = [NodeUnderTest(k, NODES[k], env, log_dir / case, run_index) for k in keys]
+            for node in nodes:
+                if not node.wait_connected(30.0):
+                    raise RuntimeError(f"{node.key} did not start (see {node.log.name})")
+            for node in nodes:
+                node.prepare()
+            if case_msgs is not None:
+                for msg in case_msgs:
+                    for node in nodes:
+                        node.send(msg, "image", 0)
+                    time.sleep(0.1)
+                    for node in nodes:
+                        node.keep_capturing()
+            else:
+                storm_all(nodes, messages, seed, pause)
+            time.sleep(0.3)
+            # A capture aborts after ~frame_timeout (1 s) without frames: probe it first.
+            for node in sorted(nodes, key=lambda n: not n.spec.capturing):
+                result = node.finish()
+                result["case"] = case
+                results.append(result)
+    finally:
+        try:
+            import rospy
+
+            rospy.signal_shutdown("fuzzing done")
+        except ImportError:
+            pass
+        stop(master)
+    return results
+
+
+def storm_all(nodes, messages: int, seed: int, pause: float):
+    """Each node gets its own seeded storm, interleaved so they run side by side."""
+    storms = {node.key: Storm(seed + i) for i, node in enumerate(nodes)}
+    for _ in range(messages):
+        for node in nodes:
+            storm = storms[node.key]
+            r = storm.rng.random()
+            if r < 0.15:
+                node.send(storm.camera_info(), "camera_info", 0)
+            elif r < 0.2:
+                # A capture must stay running: its yaw only ever garbage, never another heading.
+                node.send(storm.odom(random_yaw=not node.spec.capturing), "odom", 0)
+            else:
+                msg, valid = storm.image()
+                node.send(msg, "valid_image" if valid else "image", 0)
+        # Valid frames cost real work; give the slowest node time to take the next message.
+        time.sleep(pause)
+
+
+def print_table(results: list[dict]) -> None:
+    head = f"{'case':<18}{'node':<20}{'messages':>9}{'crashes':>8}{'non-finite':>11}"
+    print(head + f"{'over-limit':>11}{'twists':>8}  probe")
+    for r in results:
+        print(
+            f"{r['case']:<18}{r['node']:<20}{r['messages']:>9}{r['crashes']:>8}"
+            f"{r['non_finite']:>11}{r['over_limit']:>11}{r['twists']:>8}  {r['probe']}"
+        )
+
+
+def failed(result: dict) -> bool:
+    return bool(result["crashes"] or result["non_finite"] or result["over_limit"]) or (
+        result["probe"] != "ok"
+    )
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--nodes", nargs="+", choices=list(NODES), default=list(NODES))
+    parser.add_argument("--messages", type=int, default=10000, help="messages per node")
+    parser.add_argument("--seed", type=int, default=12)
+    parser.add_argument("--cases", action="store_true", help="the known crash cases instead")
+    parser.add_argument("--pause", type=float, default=0.002, help="wall s between rounds")
+    parser.add_argument("--logs", type=Path, default=Path("/tmp/follow_bot_fuzz"))
+    parser.add_argument("--json", type=Path, help="write the results here")
+    args = parser.parse_args(argv)
+    results = run(args.nodes, args.messages, args.seed, args.cases, args.logs, args.pause)
+    print_table(results)
+    if args.json:
+        args.json.write_text(json.dumps(results, indent=1))
+    return 1 if any(failed(r) for r in results) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
