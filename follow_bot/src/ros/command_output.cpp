@@ -26,21 +26,28 @@ VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse)
 
 CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse)
     : limiter_(readLimits(pnh, allow_reverse)),
-      watchdog_(positiveParam(pnh, "watchdog_timeout", 0.15)) {
+      watchdog_(positiveParam(pnh, "watchdog_timeout", 0.15)),
+      wall_watchdog_(watchdog_.timeout()) {
   publisher_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
   // Four checks per timeout bound the stop delay to 1.25 timeouts (on sim or wall time).
   timer_ =
       nh.createTimer(ros::Duration(watchdog_.timeout() / 4.0), &CommandOutput::checkWatchdog, this);
+  wall_timer_ = nh.createSteadyTimer(ros::WallDuration(watchdog_.timeout() / 4.0),
+                                     &CommandOutput::checkWallWatchdog, this);
 }
 
 CommandOutput::~CommandOutput() {
   timer_.stop();
+  wall_timer_.stop();
   stop();
 }
 
 void CommandOutput::frameArrived() {
   ++frames_since_check_;
-  watchdog_.frameArrived(ros::Time::now().toSec());
+  ros_time_at_frame_ = ros::Time::now().toSec();
+  watchdog_.frameArrived(ros_time_at_frame_);
+  wall_watchdog_.frameArrived(ros::SteadyTime::now().toSec());
+  outage_stopped_ = false;
 }
 
 Twist2D CommandOutput::send(const Twist2D& desired, const ros::Time& stamp) {
@@ -53,6 +60,9 @@ Twist2D CommandOutput::send(const Twist2D& desired, const ros::Time& stamp) {
                         : std::min(stamp.toSec() - last_stamp_.toSec(), watchdog_.timeout());
   last_stamp_ = stamp;
   const Twist2D command = limiter_.limit(desired, dt);
+  // A frame's work ends here: wall time spent on it (while a lockstep clock waits for this
+  // answer) is not silence.
+  wall_watchdog_.frameArrived(ros::SteadyTime::now().toSec());
   publish(command);
   return command;
 }
@@ -79,11 +89,25 @@ void CommandOutput::checkWatchdogNow() {
   // load the /clock thread can lag the image callbacks, so frames get stamped with a stale time.
   if (frames_since_check_ > 0) watchdog_.frameArrived(now);
   frames_since_check_ = 0;
-  if (watchdog_.shouldSendStop(now)) {
-    ROS_WARN("no camera frame since t=%.3f s (now %.3f s, timeout %.2f s): stopping the robot",
-             watchdog_.lastFrame(), now, watchdog_.timeout());
-    stop();
-  }
+  if (watchdog_.shouldSendStop(now)) stopForOutage("ROS", watchdog_.lastFrame(), now);
+}
+
+void CommandOutput::checkWallWatchdog(const ros::SteadyTimerEvent&) {
+  guardedCallback("wall watchdog", [this] {
+    // A ROS clock that moved since the last frame is the ROS-time watchdog's to judge.
+    if (ros::Time::now().toSec() != ros_time_at_frame_) return;
+    const double now = ros::SteadyTime::now().toSec();
+    if (wall_watchdog_.shouldSendStop(now)) stopForOutage("wall", wall_watchdog_.lastFrame(), now);
+  });
+}
+
+void CommandOutput::stopForOutage(const char* clock, double since, double now) {
+  if (outage_stopped_) return;
+  outage_stopped_ = true;
+  ROS_WARN(
+      "no camera frame since t=%.3f s (now %.3f s %s time, timeout %.2f s): stopping the robot",
+      since, now, clock, watchdog_.timeout());
+  stop();
 }
 
 }  // namespace follow_bot

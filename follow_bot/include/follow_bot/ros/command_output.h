@@ -9,8 +9,13 @@
 namespace follow_bot {
 
 // Publishes geometry_msgs/Twist on `cmd_vel` through a VelocityLimiter, once per call of
-// send(). A timer checks a FrameWatchdog: when frames stop for ~watchdog_timeout it publishes
-// one zero Twist and nothing more until frames return. The destructor publishes a last zero.
+// send(). Two watchdogs, one zero Twist per outage between them, then nothing until frames
+// return; the destructor publishes a last zero:
+//  * ROS time: no frame for ~watchdog_timeout of ROS time (sim time under use_sim_time).
+//  * Wall (steady) time: no frame for ~watchdog_timeout of wall time while ROS time has not
+//    advanced since the last frame. With use_sim_time, when /clock and the frames stop together
+//    (the simulator or rosbag died), ROS time stands still and the first rule never fires.
+//    A running ROS clock leaves the decision to the first rule (sim time may run at any rate).
 //
 // Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
 // ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
@@ -36,11 +41,17 @@ class CommandOutput {
   void publish(const Twist2D& command);
   void checkWatchdog(const ros::TimerEvent&);
   void checkWatchdogNow();
+  void checkWallWatchdog(const ros::SteadyTimerEvent&);
+  void stopForOutage(const char* clock, double since, double now);
 
   ros::Publisher publisher_;
   ros::Timer timer_;
+  ros::SteadyTimer wall_timer_;
   VelocityLimiter limiter_;
-  FrameWatchdog watchdog_;
+  FrameWatchdog watchdog_;       // on ROS time
+  FrameWatchdog wall_watchdog_;  // on steady time
+  double ros_time_at_frame_ = 0.0;
+  bool outage_stopped_ = false;  // one stop per outage, whichever watchdog sees it first
   ros::Time last_stamp_;
   int frames_since_check_ = 0;
 };
