@@ -15,7 +15,7 @@ export ROS_HOME := $(BUILD)/ros_home
 export FOLLOW_BOT_VENV := $(VENV)
 ROSENV := source $(DEVEL)/setup.bash &&
 
-.PHONY: deps build demo test lint format bench clean
+.PHONY: deps build demo test lint format bench fuzz clean
 
 deps:
 	tools/install_deps.sh
@@ -44,6 +44,12 @@ test: build lint
 
 bench: build
 	$(ROSENV) tools/bench.sh
+
+# Seeded storm of random and malformed messages, 10,000 per node; prints counts per node and
+# writes out/fuzz.json. Exit 1 when a node died, answered wrong or sent a bad Twist.
+fuzz: build
+	mkdir -p $(OUT)
+	$(ROSENV) rosrun harness fuzz --messages 10000 --seed 12 --json $(OUT)/fuzz.json
 
 clean:
 	rm -rf $(BUILD) $(OUT)

@@ -1,0 +1,41 @@
+"""A short seeded storm (harness.fuzz, 1,000 messages per node: random and malformed Images,
+random CameraInfo and odometry) against every node, so a crash regression cannot land.
+`make fuzz` runs the long one (10,000 per node). Prints the per-node counts."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from harness.fuzz import NODES
+
+MESSAGES = 1000
+SEED = 7
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory, pytestconfig) -> dict[str, dict]:
+    out = tmp_path_factory.mktemp("storm")
+    done = subprocess.run(
+        [sys.executable, "-m", "harness.fuzz", "--messages", str(MESSAGES), "--seed", str(SEED),
+         "--json", str(out / "storm.json"), "--logs", str(out / "logs")],
+        capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    capture = pytestconfig.pluginmanager.getplugin("capturemanager")
+    with capture.global_and_fixture_disabled():
+        print("\n" + done.stdout)
+    assert (out / "storm.json").exists(), done.stdout + done.stderr
+    return {r["node"]: r for r in json.loads((out / "storm.json").read_text())}
+
+
+@pytest.mark.parametrize("node", list(NODES))
+def test_storm_leaves_the_node_alive_correct_and_its_twists_sane(results, node):
+    r = results[node]
+    assert r["messages"] >= MESSAGES
+    assert r["alive"], f"{node} died (exit code {r['exit_code']})"
+    assert r["probe"] == "ok"
+    assert r["non_finite"] == 0
+    assert r["over_limit"] == 0
