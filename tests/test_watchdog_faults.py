@@ -12,22 +12,26 @@ initialises rospy and every node gets a master of its own.
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
 import time
 
+import cv2
+import numpy as np
 import pytest
 
-from harness.fuzz import NODES, camera_info_msg, probe_frame
+from harness.fuzz import NODES, bgr_msg, camera_info_msg, image_msg, probe_frame
 from harness.run_scenario import free_port, stop, wait_for_port
 
 RATE_HZ = 30.0
-BEHAVIOURS = ["follower", "beacon_follow", "parker_tag"]
+BEHAVIOURS = ["follower", "beacon_follow", "beacon_approach", "parker_tag", "parker_sign"]
 
 
 def client(key: str) -> None:
     import rospy
+    from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Twist
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import CameraInfo, Image
@@ -36,6 +40,15 @@ def client(key: str) -> None:
     clock_pub = rospy.Publisher("/clock", Clock, queue_size=1, tcp_nodelay=True)
     image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1, tcp_nodelay=True)
     info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1)
+    statuses: list[dict] = []  # this node's "behaviour" diagnostics, as key -> value
+    rospy.Subscriber(
+        "/diagnostics", DiagnosticArray,
+        lambda a: statuses.extend(
+            {"level": int.from_bytes(s.level, "little") if isinstance(s.level, bytes) else s.level,
+             "message": s.message, **{kv.key: kv.value for kv in s.values}}
+            for s in a.status if s.name.endswith(": behaviour")
+        ),
+    )  # fmt: skip
     sim_time = [1000.0]  # the next /clock value
     published = [0.0]  # the last /clock value sent: a Twist's arrival time on the sim clock
     last_frame = {"wall": 0.0, "sim": 0.0}
@@ -46,18 +59,34 @@ def client(key: str) -> None:
         tcp_nodelay=True,
     )  # fmt: skip
 
+    size = [(640, 480)]
+    frames = {}
+
+    def frame_of(width: int, height: int):
+        if (width, height) not in frames:
+            msg = probe_frame(NODES[key].probe)
+            image = np.frombuffer(msg.data, np.uint8).reshape(msg.height, msg.width, 3)
+            frames[(width, height)] = bgr_msg(cv2.resize(image, (width, height)))
+        return frames[(width, height)]
+
     def tick(frame: bool) -> None:
         clock = Clock()
         clock.clock = rospy.Time.from_sec(sim_time[0])
         clock_pub.publish(clock)
         published[0] = sim_time[0]
+        info_pub.publish(camera_info_msg())
         if frame:
-            msg = probe_frame(NODES[key].probe)
+            # Lockstep, as the simulator: the next tick waits for this frame's answer.
+            answered = len(twists)
+            msg = frame_of(*size[0])
             msg.header.stamp = clock.clock
             image_pub.publish(msg)
+            deadline = time.monotonic() + 2.0
+            while len(twists) == answered and time.monotonic() < deadline:
+                time.sleep(0.002)
             last_frame.update(wall=time.monotonic(), sim=sim_time[0])
-        info_pub.publish(camera_info_msg())
-        time.sleep(1.0 / RATE_HZ)
+        else:
+            time.sleep(1.0 / RATE_HZ)
         sim_time[0] += 1.0 / RATE_HZ
 
     deadline = time.monotonic() + 30
@@ -67,12 +96,12 @@ def client(key: str) -> None:
     sent = [0]
 
     def run(seconds: float, frames: bool, clock: bool = True) -> tuple[float, list]:
-        """Ticks for `seconds` of wall time; returns the wall start and the Twists in it."""
-        time.sleep(0.05)  # the answer to the last frame of the previous phase
+        """Ticks for `seconds` of sim time (frames: in lockstep), or of wall time without the
+        clock; returns the wall start and the Twists in it."""
         start = len(twists)
         sent[0] = 0
         t0 = time.monotonic()
-        while time.monotonic() - t0 < seconds:
+        for _ in range(round(seconds * RATE_HZ)):
             if clock:
                 tick(frames)
                 sent[0] += frames
@@ -82,7 +111,7 @@ def client(key: str) -> None:
 
     def outage(clock: bool) -> dict:
         """Frames stop (and /clock with them unless `clock`): the stop's delay after the last
-        frame, in sim time while the clock runs, else in wall time."""
+        frame's answer, in sim time while the clock runs, else in wall time."""
         since = dict(last_frame)
         _, during = run(1.2, frames=False, clock=clock)
         zeros = [(t, sim) for t, sim, v, w in during if v == 0.0 and w == 0.0]
@@ -99,6 +128,10 @@ def client(key: str) -> None:
     result = {}
     _, driving = run(1.5, frames=True)
     result["driving_twists"], result["driving_frames"] = len(driving), sent[0]
+    for _ in range(3):  # dropped by the checks (an odd mono16 step), counted in the diagnostics
+        image_pub.publish(image_msg(8, 4, "mono16", 17, bytes(68), (1000, 0)))
+        time.sleep(0.03)  # the input queue holds one frame
+        tick(True)
     result["frames_stop"] = outage(clock=True)
     sim_time[0] -= 100.0  # /clock jumps back
     _, after_jump = run(1.0, frames=True)
@@ -107,6 +140,18 @@ def client(key: str) -> None:
     result["after_jump_stop"] = outage(clock=True)
     run(1.0, frames=True)
     result["clock_and_frames_stop"] = outage(clock=False)
+    for width, height in [(320, 240), (1280, 720), (640, 480)]:  # resolution changes mid-run
+        size[0] = (width, height)
+        _, answers = run(1.0, frames=True)
+        result[f"resolution_{width}x{height}"] = {
+            "frames": sent[0],
+            "twists": len(answers),
+            "sane": all(abs(v) <= 0.7 and abs(w) <= math.pi for _, _, v, w in answers),
+        }
+    run(1.5, frames=True)  # a second of sim time: the next periodic report
+    result["diagnostics_last"] = statuses[-1] if statuses else None
+    wall_stops = [s for s in statuses if s.get("last watchdog stop clock") == "wall"]
+    result["diagnostics_wall_stop"] = wall_stops[0] if wall_stops else None
     print(json.dumps(result))
 
 
@@ -135,7 +180,9 @@ def faults(request) -> tuple[str, dict]:
         stop(node)
         stop(master)
     assert done.returncode == 0, done.stdout + done.stderr
-    return key, json.loads(done.stdout.strip().splitlines()[-1])
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    print(key, json.dumps(result))
+    return key, result
 
 
 def test_answers_while_frames_flow(faults):
@@ -162,6 +209,25 @@ def test_clock_and_frames_stop_together_stop_within_0_3_s_wall(faults):
     o = r["clock_and_frames_stop"]
     assert o["zeros"] == 1 and o["twists"] == 1, o
     assert o["stop_after_s"] <= 0.3, o
+
+
+@pytest.mark.parametrize("resolution", ["320x240", "1280x720", "640x480"])
+def test_resolution_change_mid_run_every_frame_answered_within_limits(faults, resolution):
+    key, r = faults
+    o = r[f"resolution_{resolution}"]
+    assert o["twists"] >= 0.9 * o["frames"] and o["sane"], o
+
+
+def test_diagnostics_tell_why_the_robot_stopped(faults):
+    key, r = faults
+    last, wall_stop = r["diagnostics_last"], r["diagnostics_wall_stop"]
+    assert last is not None, "no diagnostics for the node"
+    assert last["watchdog stops"] == "3", last  # frames stop, after the jump, with /clock
+    assert last["dropped: step N is not a multiple of N bytes"] == "3", last
+    assert int(last["frames accepted"]) > 100 and last["state"], last
+    # The report forced at the /clock-and-frames outage: an error naming the wall clock.
+    assert wall_stop is not None and wall_stop["level"] == 2, wall_stop
+    assert "stopped by the watchdog" in wall_stop["message"], wall_stop
 
 
 if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:

@@ -200,6 +200,7 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
     if (!frame) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
+      output_->frameDropped(error);
       return;
     }
     output_->frameArrived();
@@ -213,6 +214,7 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
       desired = controller_->update(blobs, stamp.toSec());
     }
     const Twist2D command = output_->send(desired, stamp);
+    output_->setState(toString(controller_->state()));
     publishDetections(*msg, blobs, command);
     if (debug_pub_.getNumSubscribers() > 0) publishDebug(*frame, blobs);
   }

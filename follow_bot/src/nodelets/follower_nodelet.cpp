@@ -199,6 +199,7 @@ class FollowerNodelet : public nodelet::Nodelet {
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
     if (!frame) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
+      output_->frameDropped(error);
       return;
     }
     // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
@@ -212,6 +213,7 @@ class FollowerNodelet : public nodelet::Nodelet {
     const ros::Time stamp = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
     const Twist2D command = output_->send(steer(seen, stamp.toSec()), stamp);
     last_command_ = command;
+    output_->setState(toString(state()));
     if (!seen.band.found) NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(state()));
     if (debug_pub_.getNumSubscribers() > 0) {
       cv_bridge::CvImage debug(msg.header, "bgr8", frame.image.clone());

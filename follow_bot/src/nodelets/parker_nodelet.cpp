@@ -146,6 +146,7 @@ class ParkerNodelet : public nodelet::Nodelet {
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
     if (!frame) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
+      output_->frameDropped(error);
       return;
     }
     output_->frameArrived();
@@ -166,6 +167,7 @@ class ParkerNodelet : public nodelet::Nodelet {
     std_msgs::String state;
     state.data = has_intrinsics_ ? toString(servo_->state()) : "searching";
     state_pub_.publish(state);
+    output_->setState(state.data);
     if (marker) publishPose(msg->header, *marker);
     if (debug_pub_.getNumSubscribers() > 0) publishDebug(*frame, marker, state.data);
   }

@@ -1,6 +1,7 @@
 #include "follow_bot/ros/command_output.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include <geometry_msgs/Twist.h>
@@ -27,8 +28,16 @@ VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse)
 CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse)
     : limiter_(readLimits(pnh, allow_reverse)),
       watchdog_(positiveParam(pnh, "watchdog_timeout", 0.15)),
-      wall_watchdog_(watchdog_.timeout()) {
+      wall_watchdog_(watchdog_.timeout()),
+      updater_(nh, pnh, pnh.getNamespace()),
+      expected_rate_(positiveParam(pnh, "expected_frame_rate", 30.0)) {
   publisher_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
+  updater_.setHardwareID("none");
+  frame_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
+      diagnostic_updater::FrequencyStatusParam(&expected_rate_, &expected_rate_, 0.2, 10),
+      "frame rate");
+  updater_.add(*frame_rate_);
+  updater_.add("behaviour", this, &CommandOutput::reportStatus);
   // Four checks per timeout bound the stop delay to 1.25 timeouts (on sim or wall time).
   timer_ =
       nh.createTimer(ros::Duration(watchdog_.timeout() / 4.0), &CommandOutput::checkWatchdog, this);
@@ -44,10 +53,51 @@ CommandOutput::~CommandOutput() {
 
 void CommandOutput::frameArrived() {
   ++frames_since_check_;
-  ros_time_at_frame_ = ros::Time::now().toSec();
-  watchdog_.frameArrived(ros_time_at_frame_);
+  watchdog_.frameArrived(ros::Time::now().toSec());
   wall_watchdog_.frameArrived(ros::SteadyTime::now().toSec());
   outage_stopped_ = false;
+  ++frames_;
+  frame_rate_->tick();
+}
+
+void CommandOutput::frameDropped(const std::string& reason) {
+  // One count per kind of problem, not per value: numbers become N, quoted or bracketed
+  // details (an encoding name, the expected size) are cut off.
+  std::string kind;
+  for (const char c : reason.substr(0, reason.find_first_of("'("))) {
+    if (!std::isdigit(static_cast<unsigned char>(c))) {
+      kind += c;
+    } else if (kind.empty() || kind.back() != 'N') {
+      kind += 'N';
+    }
+  }
+  while (!kind.empty() && (kind.back() == ' ' || kind.back() == ':')) kind.pop_back();
+  if (dropped_.size() >= 16 && dropped_.count(kind) == 0) kind = "other";
+  ++dropped_[kind.empty() ? "other" : kind];
+  ++dropped_since_report_;
+}
+
+void CommandOutput::reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  if (outage_stopped_) {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR,
+                    "stopped by the watchdog: no camera frame for %.2f s (%s time)",
+                    watchdog_.timeout(), last_stop_clock_.c_str());
+  } else if (dropped_since_report_ > 0) {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%ld frames dropped since last report",
+                    dropped_since_report_);
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
+  }
+  dropped_since_report_ = 0;
+  status.add("state", state_);
+  status.add("frames accepted", frames_);
+  long dropped = 0;
+  for (const auto& [kind, count] : dropped_) dropped += count;
+  status.add("frames dropped", dropped);
+  for (const auto& [kind, count] : dropped_) status.add("dropped: " + kind, count);
+  status.add("watchdog stops", watchdog_stops_);
+  status.add("last watchdog stop clock", last_stop_clock_);
+  status.add("watchdog timeout (s)", watchdog_.timeout());
 }
 
 Twist2D CommandOutput::send(const Twist2D& desired, const ros::Time& stamp) {
@@ -87,16 +137,27 @@ void CommandOutput::checkWatchdogNow() {
   const double now = ros::Time::now().toSec();
   // Frames handled since the last check prove the camera is alive whatever the clock says: under
   // load the /clock thread can lag the image callbacks, so frames get stamped with a stale time.
-  if (frames_since_check_ > 0) watchdog_.frameArrived(now);
+  // They arrived within the last check period, so no earlier than now - period: that keeps the
+  // stop within 1.25 timeouts of the last frame instead of one period later.
+  const double period = watchdog_.timeout() / 4.0;
+  if (frames_since_check_ > 0) {
+    watchdog_.frameArrived(std::max(watchdog_.lastFrame(), now - period));
+  }
   frames_since_check_ = 0;
   if (watchdog_.shouldSendStop(now)) stopForOutage("ROS", watchdog_.lastFrame(), now);
+  updater_.update();
 }
 
 void CommandOutput::checkWallWatchdog(const ros::SteadyTimerEvent&) {
   guardedCallback("wall watchdog", [this] {
-    // A ROS clock that moved since the last frame is the ROS-time watchdog's to judge.
-    if (ros::Time::now().toSec() != ros_time_at_frame_) return;
+    const double ros_now = ros::Time::now().toSec();
     const double now = ros::SteadyTime::now().toSec();
+    if (ros_now != ros_time_seen_) {  // a running ROS clock is the ROS-time watchdog's to judge
+      ros_time_seen_ = ros_now;
+      ros_time_moved_at_ = now;
+      return;
+    }
+    if (now - ros_time_moved_at_ <= wall_watchdog_.timeout()) return;
     if (wall_watchdog_.shouldSendStop(now)) stopForOutage("wall", wall_watchdog_.lastFrame(), now);
   });
 }
@@ -104,10 +165,13 @@ void CommandOutput::checkWallWatchdog(const ros::SteadyTimerEvent&) {
 void CommandOutput::stopForOutage(const char* clock, double since, double now) {
   if (outage_stopped_) return;
   outage_stopped_ = true;
+  ++watchdog_stops_;
+  last_stop_clock_ = clock;
   ROS_WARN(
       "no camera frame since t=%.3f s (now %.3f s %s time, timeout %.2f s): stopping the robot",
       since, now, clock, watchdog_.timeout());
   stop();
+  updater_.force_update();  // say why at once (a stopped /clock would hold back update())
 }
 
 }  // namespace follow_bot

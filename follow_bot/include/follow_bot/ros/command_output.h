@@ -1,6 +1,12 @@
 // The one way a behaviour node commands the base: limits, a frame watchdog and a final stop.
 #pragma once
 
+#include <map>
+#include <memory>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
 #include <ros/ros.h>
 
 #include "follow_bot/frame_watchdog.h"
@@ -13,9 +19,15 @@ namespace follow_bot {
 // return; the destructor publishes a last zero:
 //  * ROS time: no frame for ~watchdog_timeout of ROS time (sim time under use_sim_time).
 //  * Wall (steady) time: no frame for ~watchdog_timeout of wall time while ROS time has not
-//    advanced since the last frame. With use_sim_time, when /clock and the frames stop together
-//    (the simulator or rosbag died), ROS time stands still and the first rule never fires.
-//    A running ROS clock leaves the decision to the first rule (sim time may run at any rate).
+//    advanced for ~watchdog_timeout of wall time either. With use_sim_time, when /clock and the
+//    frames stop together (the simulator or rosbag died), ROS time stands still and the first rule
+//    never fires. A running ROS clock leaves the decision to the first rule (sim time may run at
+//    any rate).
+//
+// Diagnostics: one diagnostic_updater status per node on /diagnostics ("<node>: behaviour"):
+// frame rate against ~expected_frame_rate (Hz, 30; +-20 %), frames accepted, frames dropped
+// by reason, watchdog stops (and on which clock), the behaviour's state; ERROR while stopped by
+// the watchdog, WARN when frames were dropped since the last report. Period ~diagnostic_period.
 //
 // Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
 // ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
@@ -28,8 +40,12 @@ class CommandOutput {
   CommandOutput(const CommandOutput&) = delete;
   CommandOutput& operator=(const CommandOutput&) = delete;
 
-  // Records that a frame arrived now (call it for every received frame, good or not).
+  // Records that a usable frame arrived now.
   void frameArrived();
+  // Records a frame dropped by the checks; `reason` is the check's message.
+  void frameDropped(const std::string& reason);
+  // The behaviour's state for the diagnostics (searching, approaching, ...).
+  void setState(const std::string& state) { state_ = state; }
   // Limits `desired` (acceleration against the previous send, `stamp` being the frame's time)
   // and publishes it. Returns what was published. Any stamps are safe: the time since the
   // previous send is taken as at most ~watchdog_timeout, and as none when it runs backwards.
@@ -43,15 +59,27 @@ class CommandOutput {
   void checkWatchdogNow();
   void checkWallWatchdog(const ros::SteadyTimerEvent&);
   void stopForOutage(const char* clock, double since, double now);
+  void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   ros::Publisher publisher_;
   ros::Timer timer_;
   ros::SteadyTimer wall_timer_;
   VelocityLimiter limiter_;
-  FrameWatchdog watchdog_;       // on ROS time
-  FrameWatchdog wall_watchdog_;  // on steady time
-  double ros_time_at_frame_ = 0.0;
-  bool outage_stopped_ = false;  // one stop per outage, whichever watchdog sees it first
+  FrameWatchdog watchdog_;          // on ROS time
+  FrameWatchdog wall_watchdog_;     // on steady time
+  double ros_time_seen_ = -1.0;     // ROS time at the last wall check
+  double ros_time_moved_at_ = 0.0;  // steady time when it last changed
+  bool outage_stopped_ = false;     // one stop per outage, whichever watchdog sees it first
+
+  diagnostic_updater::Updater updater_;
+  double expected_rate_ = 30.0;  // min = max for FrequencyStatus (it keeps pointers)
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> frame_rate_;
+  std::string state_ = "starting";
+  long frames_ = 0;
+  std::map<std::string, long> dropped_;  // by reason
+  long dropped_since_report_ = 0;
+  long watchdog_stops_ = 0;
+  std::string last_stop_clock_ = "none";
   ros::Time last_stamp_;
   int frames_since_check_ = 0;
 };

@@ -1,0 +1,124 @@
+"""The parker fed 4x its frame rate (120 Hz instead of 30) with frames that cost real work (a
+tag, a sign to match): the input queue of one drops stale frames, so the latency from sending
+a frame to its pose stays bounded and does not grow, and the poses come in frame order.
+
+The ROS client runs in a child process (this file with --client)."""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+import pytest
+
+from harness.fuzz import NODES, camera_info_msg, probe_frame
+from harness.run_scenario import free_port, stop, wait_for_port
+
+RATE_HZ = 120.0
+SECONDS = 3.0
+
+
+def client(key: str) -> None:
+    import rospy
+    from geometry_msgs.msg import PoseStamped
+    from sensor_msgs.msg import CameraInfo, Image
+
+    rospy.init_node("overload_client", disable_signals=True)
+    image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1, tcp_nodelay=True)
+    info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1, latch=True)
+    sent: dict[float, float] = {}  # stamp -> wall time sent
+    poses: list[tuple[float, float]] = []  # (stamp, wall time received)
+    rospy.Subscriber(
+        "/parker/target_pose", PoseStamped,
+        lambda m: poses.append((m.header.stamp.to_sec(), time.monotonic())), tcp_nodelay=True,
+    )  # fmt: skip
+    info_pub.publish(camera_info_msg())
+    deadline = time.monotonic() + 30
+    while image_pub.get_num_connections() == 0 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    frame = probe_frame(NODES[key].probe)
+    start = time.monotonic()
+    stamp = 1000.0
+    while time.monotonic() - start < SECONDS:
+        stamp += 1.0 / RATE_HZ
+        frame.header.stamp = rospy.Time.from_sec(stamp)
+        sent[round(stamp, 6)] = time.monotonic()
+        image_pub.publish(frame)
+        time.sleep(max(0.0, start + len(sent) / RATE_HZ - time.monotonic()))
+    time.sleep(1.0)
+    latencies = [(wall - sent[round(s, 6)], wall - start) for s, wall in poses]
+    first = [lat for lat, at in latencies if at < 1.0]
+    last = [lat for lat, at in latencies if at >= SECONDS - 1.0]
+    stamps = [s for s, _ in poses]
+    print(
+        json.dumps(
+            {
+                "sent": len(sent),
+                "answered": len(poses),
+                "max_latency_s": max(lat for lat, _ in latencies),
+                "median_latency_first_s": statistics.median(first),
+                "median_latency_last_s": statistics.median(last),
+                "in_order": stamps == sorted(stamps),
+            }
+        )
+    )
+
+
+@pytest.fixture(scope="module", params=["parker_tag", "parker_sign"])
+def overload(request) -> tuple[str, dict]:
+    key = request.param
+    spec = NODES[key]
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
+    master = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL)
+    node = None
+    try:
+        assert wait_for_port(port, 20.0)
+        params = [f"_{k}:={v}" for k, v in spec.params.items()]
+        node = subprocess.Popen(
+            ["rosrun", spec.package, spec.executable, *params], env=env,
+            stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
+        )  # fmt: skip
+        done = subprocess.run(
+            [sys.executable, __file__, "--client", key],
+            env=env, capture_output=True, text=True, timeout=120,
+        )  # fmt: skip
+        assert node.poll() is None, f"{key} died (exit {node.returncode})"
+    finally:
+        stop(node)
+        stop(master)
+    assert done.returncode == 0, done.stdout + done.stderr
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    print(key, result)
+    return key, result
+
+
+def test_latency_bounded_and_not_growing(overload):
+    # Measured on an idle machine: tag 3 ms median (70 ms worst), sign ~0.1 s; on the shared
+    # 2-core build machine at load 20 the sign's worst was 0.7 s. A queue that kept stale
+    # frames would grow by 3 s x (120 Hz - answers per second) frame times instead.
+    key, r = overload
+    assert r["max_latency_s"] <= 1.0, r
+    assert r["median_latency_last_s"] <= r["median_latency_first_s"] + 0.1, r
+
+
+def test_poses_in_frame_order_and_some_answered(overload):
+    key, r = overload
+    assert r["in_order"], r
+    assert r["answered"] >= 0.1 * r["sent"], r
+
+
+def test_sign_frames_cost_more_than_a_frame_period_so_stale_ones_are_dropped(overload):
+    key, r = overload
+    if key != "parker_sign":
+        pytest.skip("tag frames cost ~1 ms: the parker keeps up with 120 Hz")
+    assert r["answered"] < 0.8 * r["sent"], r
+
+
+if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
+    client(sys.argv[2])
