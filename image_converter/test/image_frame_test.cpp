@@ -119,6 +119,14 @@ TEST(CheckFrame, PaddedMono16RowsAndEveryStampAreAccepted) {
   EXPECT_NE(checkFrame(frame).error.find("nanoseconds 1000000000"), std::string::npos);
 }
 
+TEST(ProblemKind, OneKindPerProblemWhateverTheValues) {
+  EXPECT_EQ(problemKind("step 17 is not a multiple of 2 bytes (one mono16 value)"),
+            "step N is not a multiple of N bytes");
+  EXPECT_EQ(problemKind("unsupported encoding 'x' (supported: ...)"), "unsupported encoding");
+  EXPECT_EQ(problemKind("data size 47 != height x step (48)"), "data size N != height x step");
+  EXPECT_EQ(problemKind(""), "other");
+}
+
 TEST(FrameToBgr8, SwapsBigEndianMono16) {
   // Two rows of 2 pixels (one 2-byte pad per row): 0x4D01 and 0xFF00 big-endian, i.e. 77, 255.
   const std::vector<std::uint8_t> data = {0x4D, 0x01, 0xFF, 0x00, 0, 0,

@@ -1,7 +1,6 @@
 #include "follow_bot/ros/command_output.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 
 #include <geometry_msgs/Twist.h>
@@ -61,19 +60,9 @@ void CommandOutput::frameArrived() {
 }
 
 void CommandOutput::frameDropped(const std::string& reason) {
-  // One count per kind of problem, not per value: numbers become N, quoted or bracketed
-  // details (an encoding name, the expected size) are cut off.
-  std::string kind;
-  for (const char c : reason.substr(0, reason.find_first_of("'("))) {
-    if (!std::isdigit(static_cast<unsigned char>(c))) {
-      kind += c;
-    } else if (kind.empty() || kind.back() != 'N') {
-      kind += 'N';
-    }
-  }
-  while (!kind.empty() && (kind.back() == ' ' || kind.back() == ':')) kind.pop_back();
+  std::string kind = image_converter::problemKind(reason);
   if (dropped_.size() >= 16 && dropped_.count(kind) == 0) kind = "other";
-  ++dropped_[kind.empty() ? "other" : kind];
+  ++dropped_[kind];
   ++dropped_since_report_;
 }
 

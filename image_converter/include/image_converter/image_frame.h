@@ -55,6 +55,10 @@ struct FrameCheck {
 // byte order is accepted (frameToBgr8 swaps big-endian mono16). Never reads the pixel data.
 FrameCheck checkFrame(const RawFrame& frame);
 
+// The kind of problem a checkFrame error names, for counting drops: numbers become N, quoted or
+// bracketed details (an encoding name, the expected size) are cut off.
+std::string problemKind(const std::string& error);
+
 // A cv::Mat header over a checked frame's buffer (no copy; valid while the buffer lives).
 cv::Mat wrapFrame(const RawFrame& frame, Encoding encoding);
 

@@ -1,5 +1,7 @@
 #include "image_converter/image_frame.h"
 
+#include <cctype>
+
 #include <opencv2/imgproc.hpp>
 
 namespace image_converter {
@@ -86,6 +88,19 @@ FrameCheck checkFrame(const RawFrame& frame) {
     result.error = "header stamp nanoseconds " + std::to_string(frame.stamp_nsec) + " >= 10^9";
   }
   return result;
+}
+
+std::string problemKind(const std::string& error) {
+  std::string kind;
+  for (const char c : error.substr(0, error.find_first_of("'("))) {
+    if (!std::isdigit(static_cast<unsigned char>(c))) {
+      kind += c;
+    } else if (kind.empty() || kind.back() != 'N') {
+      kind += 'N';
+    }
+  }
+  while (!kind.empty() && (kind.back() == ' ' || kind.back() == ':')) kind.pop_back();
+  return kind.empty() ? "other" : kind;
 }
 
 cv::Mat wrapFrame(const RawFrame& frame, Encoding encoding) {

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include <cv_bridge/cv_bridge.h>
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <geometry_msgs/Twist.h>
 #include <image_transport/image_transport.h>
 #include <nav_msgs/Odometry.h>
@@ -71,6 +73,10 @@ class PanoramaNodelet : public nodelet::Nodelet {
     odom_sub_ = nh.subscribe("odom", 1, &PanoramaNodelet::onOdom, this);
     image_transport::ImageTransport transport(nh);
     image_sub_ = transport.subscribe("image", 1, &PanoramaNodelet::onImage, this);
+
+    updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, pnh.getNamespace());
+    updater_->setHardwareID("none");
+    updater_->add("panorama", this, &PanoramaNodelet::reportStatus);
 
     // The service blocks until the capture ends, so it gets a queue and thread of its own.
     ros::NodeHandle service_nh(pnh);
@@ -191,8 +197,12 @@ class PanoramaNodelet : public nodelet::Nodelet {
         limiter_->stop();
         outcome_ = Outcome{false, timed_out ? "capture took longer than ~capture_timeout"
                                             : "camera frames stopped during the capture"};
+        ++aborts_;
       }
+      updater_->update();
     }
+    last_outcome_ = *outcome_;
+    updater_->force_update();
     response.success = outcome_->success;
     response.message = outcome_->message;
     return true;
@@ -206,10 +216,14 @@ class PanoramaNodelet : public nodelet::Nodelet {
     std::unique_lock<std::mutex> lock(mutex_);
     std::string error;
     const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
+    updater_->update();
     if (!frame) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
+      ++dropped_[problemKind(error)];
+      ++dropped_since_report_;
       return;
     }
+    ++frames_accepted_;
     last_frame_wall_ = ros::WallTime::now().toSec();
     const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
     // In double seconds (ros::Time's difference throws beyond 2^31 s); a gap longer than
@@ -255,6 +269,28 @@ class PanoramaNodelet : public nodelet::Nodelet {
     bool success = false;
     std::string message;
   };
+
+  // The "<node>: panorama" status on /diagnostics. Called by updater_ with mutex_ held.
+  void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
+    if (last_outcome_ && !last_outcome_->success) {
+      status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "last capture failed: %s",
+                      last_outcome_->message.c_str());
+    } else if (dropped_since_report_ > 0) {
+      status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                      "%ld frames dropped since last report", dropped_since_report_);
+    } else {
+      status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
+    }
+    dropped_since_report_ = 0;
+    status.add("state", start_requested_ || capture_->active() ? "capturing" : "idle");
+    status.add("frames accepted", frames_accepted_);
+    long dropped = 0;
+    for (const auto& [kind, count] : dropped_) dropped += count;
+    status.add("frames dropped", dropped);
+    for (const auto& [kind, count] : dropped_) status.add("dropped: " + kind, count);
+    status.add("captures stopped for lost frames or time", aborts_);
+    status.add("last capture", last_outcome_ ? last_outcome_->message : "none");
+  }
 
   Outcome stitchAndPublish(const std_msgs::Header& header) {
     const double span_deg = std::abs(wrapAngle(yaws_.front() - yaws_.back())) * 180.0 / kPi;
@@ -317,6 +353,12 @@ class PanoramaNodelet : public nodelet::Nodelet {
   std::optional<Outcome> outcome_;
   std::vector<cv::Mat> frames_;
   std::vector<double> yaws_;
+  std::optional<Outcome> last_outcome_;
+  long frames_accepted_ = 0;
+  std::map<std::string, long> dropped_;  // by problemKind
+  long dropped_since_report_ = 0;
+  long aborts_ = 0;
+  std::unique_ptr<diagnostic_updater::Updater> updater_;
 
   ros::Publisher cmd_pub_, panorama_pub_;
   ros::Subscriber camera_info_sub_, odom_sub_;
