@@ -27,6 +27,7 @@
 
 #include "image_converter/panorama_capture.h"
 #include "image_converter/panorama_nodelet.h"
+#include "image_converter/ros/checked_nodelet.h"
 #include "image_converter/ros/frame_msg.h"
 #include "image_converter/ros/params.h"
 #include "image_converter/stitching.h"
@@ -51,7 +52,7 @@ double yawOf(const nav_msgs::Odometry& odom) {
 
 }  // namespace
 
-class PanoramaNodelet : public nodelet::Nodelet {
+class PanoramaNodelet : public CheckedNodelet {
  public:
   ~PanoramaNodelet() override {
     if (spinner_) spinner_->stop();
@@ -59,7 +60,7 @@ class PanoramaNodelet : public nodelet::Nodelet {
   }
 
  private:
-  void onInit() override {
+  void init() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     readParams(pnh);  // throws on bad ~params
