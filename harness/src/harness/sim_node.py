@@ -16,9 +16,11 @@ Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and per
 
 from __future__ import annotations
 
+import argparse
 import math
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import cv2
@@ -106,9 +108,12 @@ class SimNode:
         # Synchronous publishing (queue_size=None): each message is on the wire before the next
         # is made, so a behaviour never sees frame k while its clock still says k - n. With a
         # queue, a busy sim starved rospy's sender thread and the behaviour's clock lagged frames.
-        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
-        self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=None)
-        self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=None)
+        # rospy warns about every queue_size=None publisher; here it is the intent.
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "The publisher should be created", SyntaxWarning)
+            self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
+            self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=None)
+            self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=None)
         self.pose_pub = rospy.Publisher("/sim/pose", Odometry, queue_size=1)
         self.tf = tf2_ros.TransformBroadcaster()
         self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self.inbox.put, queue_size=10)
@@ -219,7 +224,19 @@ class SimNode:
         )
 
 
+def parse_command_line(argv: list[str]) -> None:
+    """--help describes the node; anything but ROS remappings and _param:= is a usage error."""
+    parser = argparse.ArgumentParser(
+        prog="sim",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="example: rosrun harness sim _world:=course _lockstep:=false",
+    )
+    parser.parse_args(argv)
+
+
 def main() -> None:
+    parse_command_line(rospy.myargv()[1:])  # before init_node: --help starts nothing
     rospy.init_node("sim")
     try:
         node = SimNode()
