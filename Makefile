@@ -49,6 +49,7 @@ test: build lint
 	tools/run_tests.sh
 
 bench: build
+	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory follow_bot_bench_nodelets
 	$(ROSENV) tools/bench.sh
 
 clean:
