@@ -15,23 +15,29 @@ export ROS_HOME := $(BUILD)/ros_home
 export FOLLOW_BOT_VENV := $(VENV)
 ROSENV := source $(DEVEL)/setup.bash &&
 
-.PHONY: deps build demo test lint format bench fuzz clean
+.PHONY: deps nodes build demo test lint format bench fuzz clean
 
 deps:
 	tools/install_deps.sh
 
-build: deps
+# The nodes, nodelets and tools (catkin's default target): what `make demo` needs.
+nodes: deps
 	mkdir -p $(CATKIN_BUILD)
 	touch $(BUILD)/CATKIN_IGNORE $(BUILD)/COLCON_IGNORE
 	cd $(CATKIN_BUILD) && cmake $(REPO) -DCATKIN_DEVEL_PREFIX=$(DEVEL) \
 	  -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 >/dev/null
 	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory
+
+# Everything, with the gtest binaries.
+build: nodes
 	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory tests
 
 # A headless lap of the course with the follower: prints the score, writes the plot and video.
-demo: build
+demo: nodes
 	$(ROSENV) rosrun harness run_scenario worlds/scenarios/follower_lap_default.yaml \
 	  --out $(OUT) --video
+	@echo "demo: plot  $(OUT)/follower_lap_default/run.png"
+	@echo "demo: video $(OUT)/follower_lap_default/camera.mp4"
 
 lint: deps
 	tools/lint.sh
@@ -43,6 +49,7 @@ test: build lint
 	tools/run_tests.sh
 
 bench: build
+	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory follow_bot_bench_nodelets
 	$(ROSENV) tools/bench.sh
 
 # Seeded storm of random and malformed messages, 10,000 per node; prints counts per node and

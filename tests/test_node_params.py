@@ -1,4 +1,8 @@
-"""Absurd ~params are a clear start-up error (exit 1, the parameter named), never a crash."""
+"""Absurd ~params are a clear start-up error (exit 1, the parameter named), never a crash.
+
+A value of the wrong type is never silently replaced by the default: the error names the ~param,
+the expected type and its range.
+"""
 
 import os
 import subprocess
@@ -24,7 +28,48 @@ def master_env():
     ("node", "param", "words"),
     [
         ("follow_bot follower", "_kp:=-1", "kp"),
-        ("follow_bot follower", "_h_min:=200", "~h_min is outside its range"),
+        ("follow_bot follower", "_h_min:=200", "~h_min must be in [0, 179], got 200"),
+        (
+            "follow_bot follower",
+            "_kp:=abc",
+            "~kp must be a finite number in [0, 20], got the string 'abc'",
+        ),
+        (
+            "follow_bot follower",
+            "_kp:=.nan",
+            "~kp must be a finite number in [0, 20], got the string '.nan'",
+        ),
+        (
+            "follow_bot follower",
+            "_kp:=nan",
+            "~kp must be a finite number in [0, 20], got the number nan",
+        ),
+        (
+            "follow_bot follower",
+            "_band_rows:=2.5",
+            "~band_rows must be an integer in [1, 480], got the number 2.5",
+        ),
+        (
+            "follow_bot follower",
+            "_look_ahead:=maybe",
+            "~look_ahead must be a bool (true or false), got the string 'maybe'",
+        ),
+        ("follow_bot follower", "_mode:=3", "~mode must be a string, got the integer 3"),
+        (
+            "follow_bot follower",
+            "_use_odom:=1",
+            "~use_odom must be a bool (true or false), got the integer 1",
+        ),
+        (
+            "follow_bot follower",
+            "_limit_linear:=abc",
+            "~limit_linear must be a finite number > 0, got the string 'abc'",
+        ),
+        (
+            "follow_bot follower",
+            "_camera_height:=inf",
+            "~camera_height must be a finite number > 0, got the number inf",
+        ),
         ("follow_bot follower", "_mode:=fast", "~mode"),
         ("follow_bot follower", "_limit_linear:=0", "~limit_linear must be > 0"),
         ("follow_bot follower", "_watchdog_timeout:=-1", "~watchdog_timeout must be > 0"),
@@ -41,8 +86,34 @@ def master_env():
         ("follow_bot beacon_chaser", "_stop_colour:=green", "stop_colour must differ"),
         ("follow_bot beacon_chaser", "_target_shape:=cube", "~target_shape"),
         ("follow_bot beacon_chaser", "_target_size:=0", "~target_size must be > 0"),
-        ("follow_bot beacon_chaser", "_turn_gain:=50", "~turn_gain is outside its range"),
+        ("follow_bot beacon_chaser", "_turn_gain:=50", "~turn_gain must be in [0, 10], got 50"),
+        (
+            "follow_bot beacon_chaser",
+            "_sensitivity:=abc",
+            "~sensitivity must be an integer in [0, 90], got the string 'abc'",
+        ),
+        (
+            "follow_bot beacon_chaser",
+            "_stop_distance:=.nan",
+            "~stop_distance must be a finite number",
+        ),
+        (
+            "follow_bot beacon_chaser",
+            "_target_size:=big",
+            "~target_size must be a finite number > 0, got the string 'big'",
+        ),
         ("follow_bot parker", "_tag_size:=0", "~tag_size must be > 0"),
+        (
+            "follow_bot parker",
+            "_tag_size:=abc",
+            "~tag_size must be a finite number > 0, got the string 'abc'",
+        ),
+        ("follow_bot parker", "_tag_id:=one", "~tag_id must be an integer, got the string 'one'"),
+        (
+            "follow_bot parker",
+            "_publish_tf:=banana",
+            "~publish_tf must be a bool (true or false), got the string 'banana'",
+        ),
         ("follow_bot parker", "_tag_size:=-0.3", "~tag_size must be > 0"),
         ("follow_bot parker", "_target:=laser", "~target must be 'apriltag' or 'sign'"),
         ("follow_bot parker", "_tag_family:=tag99h1", "family must be one of"),
@@ -55,7 +126,31 @@ def master_env():
         ("follow_bot parker", "_target:=sign _sign_image:=/dev/null", "~sign_image: "),
         ("follow_bot parker", "_target:=sign _sign_width:=0", "~sign_width must be > 0"),
         ("follow_bot parker", "_camera_pitch_deg:=95", "~camera_pitch_deg must be within"),
-        ("image_converter image_converter", "_circle_radius:=0", "~circle_radius"),
+        (
+            "image_converter image_converter",
+            "_circle_radius:=0",
+            "~circle_radius must be > 0, got 0",
+        ),
+        (
+            "image_converter image_converter",
+            "_circle_radius:=2.5",
+            "~circle_radius must be an integer > 0, got the number 2.5",
+        ),
+        (
+            "image_converter image_converter",
+            "_display:=banana",
+            "~display must be a bool (true or false), got the string 'banana'",
+        ),
+        (
+            "image_converter panorama",
+            "_turn_rate:=abc",
+            "~turn_rate must be a finite number, got the string 'abc'",
+        ),
+        (
+            "image_converter panorama",
+            "_return_to_start:=no",
+            "~return_to_start must be a bool (true or false), got the string 'no'",
+        ),
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
         ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),
         ("image_converter panorama", "_detector:=surf", "~detector must be orb or sift"),
@@ -72,3 +167,25 @@ def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, 
     )  # fmt: skip
     assert result.returncode == 1, result.stdout + result.stderr
     assert words in result.stdout + result.stderr
+
+
+def test_a_nodelet_that_fails_to_load_in_a_manager_logs_why(master_env):
+    # A nodelet manager itself only reports "Failed to load nodelet" to the loader.
+    manager = subprocess.Popen(
+        ["rosrun", "nodelet", "nodelet", "manager", "__name:=params_manager"],
+        env=master_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )  # fmt: skip
+    try:
+        load = subprocess.run(
+            ["rosrun", "nodelet", "nodelet", "load", "follow_bot/FollowerNodelet",
+             "params_manager", "__name:=params_follower", "_kp:=abc"],
+            env=master_env, capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+        assert "Failed to load nodelet" in load.stdout + load.stderr
+    finally:
+        stop(manager)
+    log = manager.stdout.read()
+    assert (
+        "/params_follower cannot start: ~kp must be a finite number in [0, 20], "
+        "got the string 'abc'" in log
+    ), log

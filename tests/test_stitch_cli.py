@@ -117,7 +117,7 @@ def test_unstitchable_images_fail_with_a_message(images, tmp_path, inputs, words
     [
         (("left",), "need at least two input images, got 1"),
         (("left", "right", "--detector", "surf"), "unknown detector 'surf'"),
-        (("left", "right", "--bogus"), "unknown option --bogus"),
+        (("left", "right", "--bogus"), "unrecognised option '--bogus'"),
     ],
 )
 def test_bad_command_lines_exit_2_with_usage(images, tmp_path, args, words):

@@ -4,6 +4,9 @@
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 venv=${FOLLOW_BOT_VENV:-$repo/.venv}
+# The interpreter the venv is made from: Debian's, whatever python3 is first on PATH (the
+# fresh-machine test points this at a stand-in).
+venv_python=${FOLLOW_BOT_VENV_PYTHON:-/usr/bin/python3}
 packages=$(grep -v '^#' "$repo/tools/debian-packages.txt" | tr '\n' ' ')
 
 # dpkg-query exits 1 when any listed package is unknown to dpkg (always so on a fresh machine):
@@ -24,7 +27,7 @@ stamp="$venv/.requirements.sha256"
 want=$(sha256sum "$repo/harness/requirements.txt" | cut -d' ' -f1)
 if [ ! -x "$venv/bin/python3" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   echo "deps: creating the harness venv in $venv"
-  /usr/bin/python3 -m venv --system-site-packages "$venv"
+  "$venv_python" -m venv --system-site-packages "$venv"
   "$venv/bin/python3" -m pip install -q --disable-pip-version-check -r "$repo/harness/requirements.txt"
   # catkin and colcon must not crawl the venv for packages.
   touch "$venv/CATKIN_IGNORE" "$venv/COLCON_IGNORE"

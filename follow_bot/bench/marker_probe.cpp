@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include <boost/program_options.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "follow_bot/sign_detector.h"
@@ -36,64 +37,60 @@ struct Options {
   std::vector<std::string> frames;
 };
 
-[[noreturn]] void usage(const std::string& problem) {
-  std::cerr << "marker_probe: " << problem << "\n"
-            << "usage: marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N]"
-               " [--tag-family F])\n"
-               "                    [--fx F --fy F --cx C --cy C] [--independent] FRAME...\n";
-  std::exit(2);
-}
+constexpr const char* kUsage =
+    "usage: marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N] [--tag-family F])\n"
+    "                    [--fx F --fy F --cx C --cy C] [--independent] FRAME...\n\n"
+    "Detects the parking sign or an AprilTag in each frame; prints one JSON line per frame";
 
-double number(const std::string& flag, const char* text) {
-  char* end = nullptr;
-  const double value = std::strtod(text, &end);
-  if (end == text || *end != '\0') usage(flag + " needs a number, got '" + text + "'");
-  return value;
-}
+namespace po = boost::program_options;
 
-// The tag options given so far; the first one switches the probe to AprilTag mode.
-follow_bot::TagDetectorConfig& tagConfig(Options& options) {
-  if (!options.tag) options.tag.emplace();
-  return *options.tag;
-}
-
+// The options from the command line. --help prints the usage and exits 0; bad usage prints
+// the problem and the usage on stderr and exits 2.
 Options parse(int argc, char** argv) {
   Options options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (arg == "--independent") {
-      options.independent = true;
-    } else if (arg.rfind("--", 0) == 0 && !has_value) {
-      usage(arg + " needs a value");
-    } else if (arg == "--sign") {
-      options.sign_image = argv[++i];
-    } else if (arg == "--width") {
-      options.sign_width_m = number(arg, argv[++i]);
-    } else if (arg == "--tag-size") {
-      tagConfig(options).size_m = number(arg, argv[++i]);
-    } else if (arg == "--tag-id") {
-      tagConfig(options).id = static_cast<int>(number(arg, argv[++i]));
-    } else if (arg == "--tag-family") {
-      tagConfig(options).family = argv[++i];
-    } else if (arg == "--fx") {
-      options.camera.fx = number(arg, argv[++i]);
-    } else if (arg == "--fy") {
-      options.camera.fy = number(arg, argv[++i]);
-    } else if (arg == "--cx") {
-      options.camera.cx = number(arg, argv[++i]);
-    } else if (arg == "--cy") {
-      options.camera.cy = number(arg, argv[++i]);
-    } else if (arg.rfind("--", 0) == 0) {
-      usage("unknown option " + arg);
-    } else {
-      options.frames.push_back(arg);
+  follow_bot::TagDetectorConfig tag;
+  po::options_description described(kUsage);
+  described.add_options()("help,h", "print this help and exit")(
+      "sign", po::value(&options.sign_image)->value_name("IMAGE"), "the sign's reference image")(
+      "width", po::value(&options.sign_width_m)->value_name("W"), "the sign's width, m")(
+      "tag-size", po::value(&tag.size_m)->value_name("S"), "detect an AprilTag this wide, m")(
+      "tag-id", po::value(&tag.id)->value_name("N")->default_value(tag.id), "the tag's id")(
+      "tag-family", po::value(&tag.family)->value_name("F")->default_value(tag.family),
+      "the tag's family")("fx", po::value(&options.camera.fx)->default_value(options.camera.fx),
+                          "focal length, px")(
+      "fy", po::value(&options.camera.fy)->default_value(options.camera.fy), "focal length, px")(
+      "cx", po::value(&options.camera.cx)->default_value(options.camera.cx), "principal point, px")(
+      "cy", po::value(&options.camera.cy)->default_value(options.camera.cy), "principal point, px")(
+      "independent", po::bool_switch(&options.independent), "a fresh detector for every frame");
+  po::options_description all;
+  all.add(described).add_options()("frames", po::value(&options.frames));
+  po::positional_options_description positional;
+  positional.add("frames", -1);
+  std::string problem;
+  po::variables_map values;
+  try {
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(),
+              values);
+    po::notify(values);
+  } catch (const po::error& error) {
+    problem = error.what();
+  }
+  if (problem.empty() && values.count("help")) {
+    std::cout << described;
+    std::exit(0);
+  }
+  if (problem.empty()) {
+    if (values.count("tag-size")) options.tag = tag;
+    if (options.sign_image.empty() == !options.tag) {
+      problem = "give either --sign IMAGE --width W or --tag-size S";
+    } else if (options.frames.empty()) {
+      problem = "no frames given";
     }
   }
-  if (options.sign_image.empty() == !options.tag) {
-    usage("give either --sign IMAGE --width W or --tag-size S");
+  if (!problem.empty()) {
+    std::cerr << "marker_probe: " << problem << "\n" << described;
+    std::exit(2);
   }
-  if (options.frames.empty()) usage("no frames given");
   return options;
 }
 

@@ -28,6 +28,7 @@
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/ros/params.h"
+#include "image_converter/ros/checked_nodelet.h"
 
 namespace follow_bot {
 
@@ -48,7 +49,8 @@ void requireColourName(const std::string& name, const std::string& colour) {
 
 // The core configurations for `cfg`, on top of `base` for what only start-up sets (target
 // object, camera). Throws std::invalid_argument naming the first bad value; used for the ~params
-// at start-up and for every reconfiguration, so both are held to the same rules.
+// at start-up and for every reconfiguration, so both are held to the same rules. Ranges are the
+// .cfg's: readConfig checks them at start-up, the dynamic_reconfigure server clamps live updates.
 Settings coreSettings(const BeaconChaserConfig& cfg, const BeaconControllerConfig& base) {
   Settings settings;
   ColourBlobConfig& detector = settings.detector;
@@ -91,19 +93,6 @@ Settings coreSettings(const BeaconChaserConfig& cfg, const BeaconControllerConfi
        {validate(controller), checkColoursDetected(controller, detector)}) {
     if (!error.empty()) throw std::invalid_argument(error);
   }
-
-  // dynamic_reconfigure clamps live updates to the .cfg ranges, but ~params read at start-up
-  // are not clamped.
-  BeaconChaserConfig clamped = cfg;
-  clamped.__clamp__();
-  for (const auto& param : BeaconChaserConfig::__getParamDescriptions__()) {
-    uint32_t changed = 0;  // every parameter has level 1: non-zero when clamping changed it
-    param->calcLevel(changed, cfg, clamped);
-    if (changed != 0) {
-      throw std::invalid_argument("~" + param->name + " is outside its range (" +
-                                  param->description + "; ranges in README.md)");
-    }
-  }
   return settings;
 }
 
@@ -111,8 +100,7 @@ Settings coreSettings(const BeaconChaserConfig& cfg, const BeaconControllerConfi
 // camera_info). Throws std::invalid_argument naming the first bad value.
 BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
   BeaconControllerConfig controller;
-  std::string shape = "box";
-  pnh.param<std::string>("target_shape", shape, shape);
+  const std::string shape = param<std::string>(pnh, "target_shape", "box");
   const std::optional<BeaconShape> parsed_shape = parseBeaconShape(shape);
   if (!parsed_shape) {
     throw std::invalid_argument("~target_shape must be 'box' or 'sphere', got '" + shape + "'");
@@ -125,14 +113,13 @@ BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
 
 }  // namespace
 
-class BeaconChaserNodelet : public nodelet::Nodelet {
+class BeaconChaserNodelet : public image_converter::CheckedNodelet {
  private:
-  void onInit() override {
+  void init() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    BeaconChaserConfig cfg = BeaconChaserConfig::__getDefault__();
-    cfg.__fromServer__(pnh);
-    apply(coreSettings(cfg, readStartupConfig(pnh)), cfg);  // throws on bad ~params
+    applied_config_ = readConfig<BeaconChaserConfig>(pnh);  // throws on bad ~params
+    apply(coreSettings(applied_config_, readStartupConfig(pnh)));
     output_ = std::make_unique<CommandOutput>(nh, pnh);
 
     detections_pub_ = pnh.advertise<BeaconDetections>("detections", 1);
@@ -154,18 +141,17 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
   // Called with mutex_ held by the dynamic_reconfigure server. A combination the core rejects
   // changes nothing, and the server then reports the settings still in force.
   void reconfigure(BeaconChaserConfig& config) {
-    try {
-      apply(coreSettings(config, settings_.controller), config);
-    } catch (const std::invalid_argument& error) {
-      NODELET_WARN("rejected reconfiguration, keeping the previous settings: %s", error.what());
-      config = applied_config_;
+    const std::string error = applyOrKeep(
+        config, applied_config_,
+        [this](const BeaconChaserConfig& c) { apply(coreSettings(c, settings_.controller)); });
+    if (!error.empty()) {
+      NODELET_WARN("rejected reconfiguration, keeping the previous settings: %s", error.c_str());
     }
   }
 
   // New settings start with fresh controller state (a new mode must not inherit the old one's).
-  void apply(const Settings& settings, const BeaconChaserConfig& config) {
+  void apply(const Settings& settings) {
     settings_ = settings;
-    applied_config_ = config;
     detector_ = std::make_unique<ColourBlobDetector>(settings.detector);
     controller_ = std::make_unique<BeaconController>(settings.controller);
   }
@@ -186,7 +172,7 @@ class BeaconChaserNodelet : public nodelet::Nodelet {
     }
     if (changed || !has_intrinsics_) {
       has_intrinsics_ = true;
-      apply(settings_, applied_config_);
+      apply(settings_);
     }
   }
 

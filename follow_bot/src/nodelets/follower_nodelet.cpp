@@ -25,6 +25,7 @@
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/ros/params.h"
+#include "image_converter/ros/checked_nodelet.h"
 
 namespace follow_bot {
 
@@ -38,19 +39,9 @@ struct Settings {
   bool path_mode = false;
 };
 
-// Throws std::invalid_argument naming the first bad value.
+// Throws std::invalid_argument naming the first bad value. Ranges are the .cfg's: readConfig
+// checks them at start-up, the dynamic_reconfigure server clamps live updates to them.
 Settings coreSettings(const FollowerConfig& cfg) {
-  // dynamic_reconfigure clamps live updates, but ~params read at start-up are not clamped.
-  FollowerConfig clamped = cfg;
-  clamped.__clamp__();
-  for (const auto& param : FollowerConfig::__getParamDescriptions__()) {
-    uint32_t changed = 0;  // every parameter has level 1: non-zero when clamping changed it
-    param->calcLevel(changed, cfg, clamped);
-    if (changed != 0) {
-      throw std::invalid_argument("~" + param->name + " is outside its range (" +
-                                  param->description + "; ranges in README.md)");
-    }
-  }
   Settings settings;
   LineDetectorConfig& detector = settings.detector;
   detector.lower = {cfg.h_min, cfg.s_min, cfg.v_min};
@@ -92,19 +83,18 @@ Settings coreSettings(const FollowerConfig& cfg) {
 
 }  // namespace
 
-class FollowerNodelet : public nodelet::Nodelet {
+class FollowerNodelet : public image_converter::CheckedNodelet {
  private:
-  void onInit() override {
+  void init() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
 
-    FollowerConfig cfg = FollowerConfig::__getDefault__();
-    cfg.__fromServer__(pnh);
-    apply(coreSettings(cfg));  // throws on bad ~params
+    applied_config_ = readConfig<FollowerConfig>(pnh);  // throws on bad ~params
+    apply(coreSettings(applied_config_));
     camera_ = readCameraMounting(pnh);
     output_ = std::make_unique<CommandOutput>(nh, pnh);
     camera_info_sub_ = nh.subscribe("camera_info", 1, &FollowerNodelet::onCameraInfo, this);
-    pnh.param("use_odom", use_odom_, false);
+    use_odom_ = param(pnh, "use_odom", false);
     if (use_odom_) odom_sub_ = nh.subscribe("odom", 1, &FollowerNodelet::onOdometry, this);
 
     reconfigure_ = std::make_unique<dynamic_reconfigure::Server<FollowerConfig>>(mutex_, pnh);
@@ -117,12 +107,13 @@ class FollowerNodelet : public nodelet::Nodelet {
     image_sub_ = transport.subscribe("image", 1, &FollowerNodelet::onImage, this);
   }
 
-  // Called with mutex_ held by the dynamic_reconfigure server.
-  void reconfigure(const FollowerConfig& config) {
-    try {
-      apply(coreSettings(config));
-    } catch (const std::invalid_argument& error) {
-      NODELET_ERROR("rejected reconfiguration, keeping the previous settings: %s", error.what());
+  // Called with mutex_ held by the dynamic_reconfigure server. A combination the core rejects
+  // changes nothing, and the server then reports the settings still in force.
+  void reconfigure(FollowerConfig& config) {
+    const std::string error = applyOrKeep(
+        config, applied_config_, [this](const FollowerConfig& c) { apply(coreSettings(c)); });
+    if (!error.empty()) {
+      NODELET_WARN("rejected reconfiguration, keeping the previous settings: %s", error.c_str());
     }
   }
 
@@ -239,6 +230,7 @@ class FollowerNodelet : public nodelet::Nodelet {
   std::unique_ptr<LineController> controller_;
   std::unique_ptr<LinePathFollower> path_follower_;
   Settings settings_;
+  FollowerConfig applied_config_;  // the dynamic_reconfigure settings in force
   CameraGeometry camera_;
   bool has_intrinsics_ = false;
   Twist2D last_command_;  // what the robot was told to do since the previous frame

@@ -33,6 +33,7 @@
 #include "follow_bot/ros/params.h"
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/tag_detector.h"
+#include "image_converter/ros/checked_nodelet.h"
 
 namespace follow_bot {
 
@@ -95,9 +96,9 @@ ParkingServoConfig readServoConfig(const ros::NodeHandle& pnh) {
 
 }  // namespace
 
-class ParkerNodelet : public nodelet::Nodelet {
+class ParkerNodelet : public image_converter::CheckedNodelet {
  private:
-  void onInit() override {
+  void init() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     detector_ = makeDetector(pnh, target_);  // throws on bad ~params

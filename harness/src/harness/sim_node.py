@@ -11,14 +11,18 @@ frames at ~rate_hz of wall clock, the latest command applied.
 Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and perturbations) or
 ~world (a world YAML or name), ~rate_hz (30), ~duration (s, 0 = forever), ~lockstep (true),
 ~reply_timeout (2.0 wall s), ~record (path of an .npz trajectory log written at the end),
-~video (path of an MP4 of the camera view, optional), ~wait_for_behaviour (20 wall s).
+~video (path of an MP4 of the camera view, optional), ~video_debug (the behaviour's namespace,
+default /follower: the video shows its ~debug_image and the state and command of its ~line beside
+the camera view; "" for the camera view alone), ~wait_for_behaviour (20 wall s).
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import cv2
@@ -30,6 +34,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
 
+from harness.debug_video import DebugView
 from harness.ros_image import bgr_to_msg
 from harness.scenario import ScenarioError, load_scenario
 from harness.simulation import LapTracker, Perturbations, Simulation
@@ -98,6 +103,8 @@ class SimNode:
         self.sim = Simulation(world, rate_hz=self.rate_hz, start=start, perturbations=perturbations)
         self.record_path = rospy.get_param("~record", "")
         self.video_path = rospy.get_param("~video", "")
+        debug_ns = rospy.get_param("~video_debug", "/follower")
+        self.debug_view = DebugView(debug_ns) if self.video_path and debug_ns else None
         self.wait_for_behaviour = float(rospy.get_param("~wait_for_behaviour", 20.0))
         self.laps = LapTracker(world.centreline()) if self.stop_at_lap else None
 
@@ -106,9 +113,12 @@ class SimNode:
         # Synchronous publishing (queue_size=None): each message is on the wire before the next
         # is made, so a behaviour never sees frame k while its clock still says k - n. With a
         # queue, a busy sim starved rospy's sender thread and the behaviour's clock lagged frames.
-        self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
-        self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=None)
-        self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=None)
+        # rospy warns about every queue_size=None publisher; here it is the intent.
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", "The publisher should be created", SyntaxWarning)
+            self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
+            self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=None)
+            self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=None)
         self.pose_pub = rospy.Publisher("/sim/pose", Odometry, queue_size=1)
         self.tf = tf2_ros.TransformBroadcaster()
         self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self.inbox.put, queue_size=10)
@@ -121,14 +131,13 @@ class SimNode:
     def _publish_clock(self) -> None:
         self.clock_pub.publish(Clock(clock=self._stamp()))
 
-    def _publish_frame(self, video) -> None:
+    def _publish_frame(self) -> np.ndarray:
         stamp = self._stamp()
         image = self.sim.render()
-        if video is not None:
-            video.write(image)
         self.camera_info.header.stamp = stamp
         self.info_pub.publish(self.camera_info)
         self.image_pub.publish(bgr_to_msg(image, stamp, self.camera_info.header.frame_id))
+        return image
 
     def _publish_pose(self) -> None:
         x, y, yaw = self.sim.pose
@@ -174,7 +183,8 @@ class SimNode:
         if self.video_path:
             cam = self.sim.renderer.camera
             fourcc = cv2.VideoWriter_fourcc(*"mp4v")
-            video = cv2.VideoWriter(self.video_path, fourcc, self.rate_hz, (cam.width, cam.height))
+            width = cam.width * (2 if self.debug_view else 1)
+            video = cv2.VideoWriter(self.video_path, fourcc, self.rate_hz, (width, cam.height))
         self._publish_clock()
         if self.lockstep:
             self._wait_for_behaviour()
@@ -186,8 +196,7 @@ class SimNode:
                 self._publish_clock()
                 self._publish_pose()
                 frame = self.sim.frames_flowing()
-                if frame:
-                    self._publish_frame(video)
+                image = self._publish_frame() if frame else None
                 missed = False
                 if self.lockstep:
                     if frame:
@@ -197,6 +206,8 @@ class SimNode:
                 else:
                     next_wall += period
                     time.sleep(max(0.0, next_wall - time.monotonic()))
+                if video is not None and image is not None:  # after the reply: its overlay too
+                    video.write(self.debug_view.frame(image) if self.debug_view else image)
                 replies = self.inbox.take()
                 self.sim.step(self.inbox.latest, frame=frame, replies=replies, missed=missed)
         finally:
@@ -219,7 +230,19 @@ class SimNode:
         )
 
 
+def parse_command_line(argv: list[str]) -> None:
+    """--help describes the node; anything but ROS remappings and _param:= is a usage error."""
+    parser = argparse.ArgumentParser(
+        prog="sim",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="example: rosrun harness sim _world:=course _lockstep:=false",
+    )
+    parser.parse_args(argv)
+
+
 def main() -> None:
+    parse_command_line(rospy.myargv()[1:])  # before init_node: --help starts nothing
     rospy.init_node("sim")
     try:
         node = SimNode()

@@ -10,15 +10,16 @@
 #include <sensor_msgs/Image.h>
 
 #include "image_converter/overlay.h"
+#include "image_converter/ros/checked_nodelet.h"
 
 namespace image_converter {
 
-class ImageConverterNodelet : public nodelet::Nodelet {
+class ImageConverterNodelet : public CheckedNodelet {
  public:
   ~ImageConverterNodelet() override;
 
  private:
-  void onInit() override;
+  void init() override;
   void updateSubscription();
   void subscribe();
   void onImage(const sensor_msgs::ImageConstPtr& msg);

@@ -18,6 +18,7 @@
 #include "image_converter/image_converter_nodelet.h"
 #include "image_converter/overlay.h"
 #include "image_converter/ros/frame_msg.h"
+#include "image_converter/ros/params.h"
 
 namespace image_converter {
 
@@ -30,19 +31,16 @@ bool displayAvailable() {
 }
 }  // namespace
 
-void ImageConverterNodelet::onInit() {
+void ImageConverterNodelet::init() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
 
-  pnh.param("circle_radius", overlay_.radius_px, overlay_.radius_px);
-  pnh.param("circle_thickness", overlay_.thickness_px, overlay_.thickness_px);
-  pnh.param("display", display_, false);
-  pnh.param<std::string>("image_transport", transport_, "raw");
-  if (!isValid(overlay_)) {
-    throw std::invalid_argument("~circle_radius and ~circle_thickness must be > 0 (got " +
-                                std::to_string(overlay_.radius_px) + ", " +
-                                std::to_string(overlay_.thickness_px) + ")");
-  }
+  const auto positive = [](int value) { return value > 0; };
+  overlay_.radius_px = checkedParam(pnh, "circle_radius", overlay_.radius_px, positive, "> 0");
+  overlay_.thickness_px =
+      checkedParam(pnh, "circle_thickness", overlay_.thickness_px, positive, "> 0");
+  display_ = param(pnh, "display", false);
+  transport_ = param<std::string>(pnh, "image_transport", "raw");
   if (display_ && !displayAvailable()) {
     NODELET_WARN(
         "~display is true but no X display is available (DISPLAY is unset); "

@@ -30,6 +30,7 @@
 
 #include "image_converter/panorama_capture.h"
 #include "image_converter/panorama_nodelet.h"
+#include "image_converter/ros/checked_nodelet.h"
 #include "image_converter/ros/frame_msg.h"
 #include "image_converter/ros/params.h"
 #include "image_converter/stitching.h"
@@ -54,7 +55,7 @@ double yawOf(const nav_msgs::Odometry& odom) {
 
 }  // namespace
 
-class PanoramaNodelet : public nodelet::Nodelet {
+class PanoramaNodelet : public CheckedNodelet {
  public:
   ~PanoramaNodelet() override {
     if (spinner_) spinner_->stop();
@@ -62,7 +63,7 @@ class PanoramaNodelet : public nodelet::Nodelet {
   }
 
  private:
-  void onInit() override {
+  void init() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     readParams(pnh);  // throws on bad ~params

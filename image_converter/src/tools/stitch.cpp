@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include <boost/program_options.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "image_converter/stitching.h"
@@ -18,34 +19,48 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift] [--json]\n";
+    "usage: stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift] [--json]\n\n"
+    "Stitches overlapping images (left to right) into one panorama";
 
 struct Arguments {
   std::vector<std::string> inputs;
   std::string output;
   image_converter::MatchOptions options;
   bool json = false;
+  bool help = false;
 };
 
-// Fills `arguments`; returns an error message, or "" when the command line is usable.
-std::string parse(int argc, char** argv, Arguments& arguments) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "-o" || arg == "--output") {
-      if (++i == argc) return arg + " needs a file name";
-      arguments.output = argv[i];
-    } else if (arg == "--detector") {
-      if (++i == argc) return "--detector needs orb or sift";
-      if (!image_converter::parseDetector(argv[i], arguments.options.detector)) {
-        return std::string("unknown detector '") + argv[i] + "' (use orb or sift)";
-      }
-    } else if (arg == "--json") {
-      arguments.json = true;
-    } else if (arg.size() > 1 && arg[0] == '-') {
-      return "unknown option " + arg;
-    } else {
-      arguments.inputs.push_back(arg);
-    }
+namespace po = boost::program_options;
+
+// Fills `arguments`; returns an error message, or "" when the command line is usable (or asks
+// for --help). `usage` gets the usage text with every option.
+std::string parse(int argc, char** argv, Arguments& arguments, std::string& usage) {
+  po::options_description options(kUsage);
+  std::string detector = "orb";
+  options.add_options()("help,h", po::bool_switch(&arguments.help), "print this help and exit")(
+      "output,o", po::value(&arguments.output)->value_name("FILE"), "panorama to write")(
+      "detector", po::value(&detector)->value_name("orb|sift")->default_value(detector),
+      "feature detector")("json", po::bool_switch(&arguments.json),
+                          "print each pair's homography, match and inlier counts and RMS "
+                          "reprojection error as JSON");
+  std::ostringstream text;
+  text << options;
+  usage = text.str();
+  po::options_description all;
+  all.add(options).add_options()("inputs", po::value(&arguments.inputs));
+  po::positional_options_description positional;
+  positional.add("inputs", -1);
+  try {
+    po::variables_map values;
+    po::store(po::command_line_parser(argc, argv).options(all).positional(positional).run(),
+              values);
+    po::notify(values);
+  } catch (const po::error& error) {
+    return error.what();
+  }
+  if (arguments.help) return "";
+  if (!image_converter::parseDetector(detector, arguments.options.detector)) {
+    return "unknown detector '" + detector + "' (use orb or sift)";
   }
   if (arguments.output.empty()) return "no output file (-o pano.png)";
   if (arguments.inputs.size() < 2) {
@@ -96,10 +111,15 @@ void printJson(const Arguments& arguments, const image_converter::StitchResult& 
 
 int main(int argc, char** argv) {
   Arguments arguments;
-  const std::string usage_error = parse(argc, argv, arguments);
+  std::string usage;
+  const std::string usage_error = parse(argc, argv, arguments, usage);
   if (!usage_error.empty()) {
-    std::cerr << "stitch: " << usage_error << "\n" << kUsage;
+    std::cerr << "stitch: " << usage_error << "\n" << usage;
     return 2;
+  }
+  if (arguments.help) {
+    std::cout << usage;
+    return 0;
   }
   std::vector<cv::Mat> images;
   for (const std::string& path : arguments.inputs) {

@@ -39,9 +39,8 @@ inline int runNodelet(int argc, char** argv, const std::string& default_name,
   nodelet::V_string my_argv(argv + 1, argv + argc);
   try {
     nodelet->init(ros::this_node::getName(), remappings, my_argv);
-  } catch (const std::exception& error) {
-    ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), error.what());
-    return 1;
+  } catch (const std::exception&) {
+    return 1;  // the nodelet has logged why (CheckedNodelet)
   }
   ros::CallbackQueue& queue = *ros::getGlobalCallbackQueue();
   while (ros::ok() && !detail::shutdownRequested()) {

@@ -1,0 +1,81 @@
+"""Every command-line tool behaves as ROS users expect: --help prints the usage on stdout and
+exits 0 (starting nothing), bad usage exits 2 with the problem and the usage on stderr."""
+
+import os
+import subprocess
+
+import pytest
+
+from harness.run_scenario import free_port, stop, wait_for_port
+
+TOOLS = {
+    "stitch": ["rosrun", "image_converter", "stitch"],
+    "marker_probe": ["rosrun", "follow_bot", "marker_probe"],
+    "sim": ["rosrun", "harness", "sim"],
+    "run_scenario": ["rosrun", "harness", "run_scenario"],
+}
+
+# No master listens here: a tool that tried to start ROS would hang until the timeout.
+NO_MASTER = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{free_port()}")
+
+
+def run(args: list[str]) -> subprocess.CompletedProcess:
+    return subprocess.run(args, env=NO_MASTER, capture_output=True, text=True, timeout=20)
+
+
+@pytest.mark.parametrize(
+    ("tool", "flag"),
+    [
+        ("stitch", "--help"),
+        ("stitch", "-h"),
+        ("marker_probe", "--help"),
+        ("sim", "--help"),
+        ("run_scenario", "--help"),
+    ],
+)
+def test_help_prints_the_usage_and_exits_0(tool, flag):
+    result = run([*TOOLS[tool], flag])
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith(f"usage: {tool}"), result.stdout
+    assert result.stderr == ""
+
+
+@pytest.mark.parametrize(
+    ("tool", "args", "problem"),
+    [
+        ("stitch", [], "stitch: no output file (-o pano.png)"),
+        ("stitch", ["a.png", "b.png", "-o"], "stitch: the required argument for option"),
+        ("stitch", ["a.png", "b.png", "-o", "p.png", "--frob"], "unrecognised option '--frob'"),
+        ("stitch", ["a.png", "-o", "p.png"], "need at least two input images, got 1"),
+        ("stitch", ["a.png", "b.png", "-o", "p.png", "--detector", "surf"], "'surf'"),
+        ("marker_probe", ["--tag-size", "0.2"], "marker_probe: no frames given"),
+        ("marker_probe", ["--tag-size", "big", "f.png"], "marker_probe: the argument ('big')"),
+        ("marker_probe", ["f.png"], "give either --sign IMAGE --width W or --tag-size S"),
+        ("sim", ["--frob"], "sim: error: unrecognized arguments: --frob"),
+        ("run_scenario", ["--frob"], "error: "),  # its prog name is the scenarios owner's
+    ],
+)
+def test_bad_usage_exits_2_with_the_usage_on_stderr(tool, args, problem):
+    result = run([*TOOLS[tool], *args])
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert problem in result.stderr
+    assert "usage: " + tool in result.stderr
+    assert result.stdout == ""
+
+
+def test_the_simulator_starts_without_warnings():
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
+    roscore = subprocess.Popen(
+        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
+    )
+    try:
+        assert wait_for_port(port, 20.0)
+        sim = subprocess.run(
+            [*TOOLS["sim"], "_world:=course", "_lockstep:=false", "_duration:=0.5"],
+            env=env, capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+    finally:
+        stop(roscore)
+    assert sim.returncode == 0, sim.stderr
+    assert "Warning" not in sim.stderr and "WARN" not in sim.stdout + sim.stderr, sim.stderr

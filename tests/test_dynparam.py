@@ -1,0 +1,80 @@
+"""dynamic_reconfigure tells the truth: a rejected update leaves, and reports, the settings in
+force, and the next valid update is accepted. One round trip per node with a .cfg."""
+
+import os
+import subprocess
+import time
+
+import pytest
+import yaml
+
+from harness.run_scenario import free_port, stop, wait_for_port
+
+
+@pytest.fixture(scope="module")
+def master_env():
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
+    roscore = subprocess.Popen(
+        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
+    )
+    assert wait_for_port(port, 20.0)
+    yield env
+    stop(roscore)
+
+
+def dynparam(env, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        ["rosrun", "dynamic_reconfigure", "dynparam", *args],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=30,
+        check=True,
+    )
+
+
+def settings(env, node: str) -> dict:
+    """`dynparam get`: the settings the node reports, without the copy nested under "groups"."""
+    reported = yaml.safe_load(dynparam(env, "get", node).stdout)
+    reported.pop("groups")
+    return reported
+
+
+@pytest.mark.parametrize(
+    ("node", "name", "bad", "valid"),
+    [
+        # An unknown steering law.
+        ("follower", "mode", {"mode": "banana"}, {"mode": "pd"}),
+        # Each within the .cfg's ranges, but the core rejects the combination.
+        ("follower", "h_min", {"h_min": 40}, {"h_min": 25}),  # above ~h_max (30)
+        ("beacon_chaser", "stop_colour", {"stop_colour": "green"}, {"stop_colour": "blue"}),
+    ],
+)
+def test_rejected_update_reports_the_settings_in_force(master_env, node, name, bad, valid):
+    ros_name = f"/{node}_{name}"
+    behaviour = subprocess.Popen(
+        ["rosrun", "follow_bot", node, f"__name:={ros_name[1:]}"],
+        env=master_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 30.0
+        while True:
+            listed = subprocess.run(
+                ["rosservice", "list"], env=master_env, capture_output=True, text=True
+            ).stdout
+            if f"{ros_name}/set_parameters" in listed:
+                break
+            assert time.monotonic() < deadline and behaviour.poll() is None, "node did not start"
+            time.sleep(0.2)
+        before = settings(master_env, ros_name)
+
+        dynparam(master_env, "set", ros_name, yaml.safe_dump(bad))
+        assert settings(master_env, ros_name) == before
+
+        dynparam(master_env, "set", ros_name, yaml.safe_dump(valid))
+        assert settings(master_env, ros_name) == {**before, **valid}
+    finally:
+        stop(behaviour)
+    log = behaviour.stdout.read()
+    assert log.count("rejected reconfiguration, keeping the previous settings") == 1, log
