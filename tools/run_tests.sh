@@ -28,6 +28,7 @@ if [ $rc -ne 0 ] && [ $rc -ne 1 ]; then  # 1 = some tests failed, counted from t
   status=1
 fi
 
-/usr/bin/python3 "$repo/tools/test_summary.py" "$build/test_results" "$build/catkin/test_results" ||
+/usr/bin/python3 "$repo/tools/test_summary.py" \
+  catkin="$build/catkin/test_results" pytest="$build/test_results/pytest.xml" ||
   status=1
 exit $status
