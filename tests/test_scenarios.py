@@ -12,11 +12,15 @@ from pathlib import Path
 import pytest
 
 SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
-SCENARIOS = sorted(
-    path
-    for pattern in ("follower_*.yaml", "dumpster_*.yaml", "beacons_*.yaml", "parker_*.yaml")
-    for path in SCENARIO_DIR.glob(pattern)
-)
+# How many scenarios each family holds: a glob that finds fewer (a rename, a bad pattern) fails
+# test_every_family_has_its_scenarios instead of silently running nothing.
+FAMILY_SIZES = {"follower": 13, "dumpster": 9, "beacons": 9, "parker": 27}
+FAMILIES = {family: sorted(SCENARIO_DIR.glob(f"{family}_*.yaml")) for family in FAMILY_SIZES}
+SCENARIOS = [path for paths in FAMILIES.values() for path in paths]
+
+
+def test_every_family_has_its_scenarios():
+    assert {family: len(paths) for family, paths in FAMILIES.items()} == FAMILY_SIZES
 
 
 @pytest.mark.parametrize("scenario", SCENARIOS, ids=[p.stem for p in SCENARIOS])
