@@ -30,8 +30,8 @@ build: deps
 
 # A headless lap of the course with the follower: prints the score, writes the plot and video.
 demo: build
-	$(ROSENV) rosrun harness run_scenario worlds/scenarios/follower_lap_default.yaml \
-	  --out $(OUT) --video
+	$(ROSENV) rosrun harness run_scenario worlds/scenarios/follower.yaml \
+	  --select follower/lap_default --out $(OUT) --video
 
 lint: deps
 	tools/lint.sh

@@ -1,9 +1,9 @@
 """The behaviours in the closed loop, each judged by its scenario's own criteria.
 
-Every follower_*, dumpster_*, beacons_* and parker_* scenario in worlds/scenarios is played by
-run_scenario: all the selected ones in one call with --jobs (each in its own ROS graph: its own
-roscore, the behaviour's launch file, the simulator in lockstep), then one test per scenario reads
-its result.json and fails with every unmet criterion listed.
+Every run of the scenario families in worlds/scenarios (one file each, a base and a matrix) is
+played by run_scenario: all the selected runs in one call with --jobs (each in its own ROS
+graph: its own roscore, the behaviour's launch file, the simulator in lockstep), then one test
+per run reads its result.json and fails with every unmet criterion listed.
 """
 
 import json
@@ -13,44 +13,62 @@ from pathlib import Path
 
 import pytest
 
+from harness.scenario import load_scenarios
+
 SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
-# How many scenarios each family holds: a glob that finds fewer (a rename, a bad pattern) fails
-# test_every_family_has_its_scenarios instead of silently running nothing.
-FAMILY_SIZES = {"follower": 13, "dumpster": 9, "beacons": 9, "parker": 27}
-FAMILIES = {family: sorted(SCENARIO_DIR.glob(f"{family}_*.yaml")) for family in FAMILY_SIZES}
-SCENARIOS = [path for paths in FAMILIES.values() for path in paths]
+# How many runs each family's matrix holds: a file that expands to fewer (a lost matrix entry, a
+# renamed file) fails test_every_family_has_its_runs instead of silently running less.
+FAMILY_SIZES = {
+    "follower": 13, "dumpster": 9, "beacons_follow_green": 5, "beacons_red_stop": 4,
+    "parker_tag": 15, "parker_sign": 12,
+}  # fmt: skip
+FAMILIES = {
+    family: [s.name for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")]
+    for family in FAMILY_SIZES
+}
+RUNS = [name for names in FAMILIES.values() for name in names]
 JOBS = int(os.environ.get("SCENARIO_JOBS", os.cpu_count() or 1))
 
 
-def test_every_family_has_its_scenarios():
-    assert {family: len(paths) for family, paths in FAMILIES.items()} == FAMILY_SIZES
+def test_every_family_has_its_runs():
+    assert {family: len(names) for family, names in FAMILIES.items()} == FAMILY_SIZES
 
 
 @pytest.fixture(scope="session")
 def results(request, tmp_path_factory) -> Path:
-    """Plays every scenario this session selected in one run_scenario call; its output folder."""
+    """Plays every run this session selected in one run_scenario call; its output folder."""
     selected = sorted(
         {
-            item.callspec.params["scenario"]
+            item.callspec.params["run"]
             for item in request.session.items
             if getattr(item, "originalname", "") == "test_behaviour_scenario"
         }
     )
+    families = sorted({str(SCENARIO_DIR / f"{name.split('/')[0]}.yaml") for name in selected})
     out = tmp_path_factory.mktemp("scenarios")
     subprocess.run(
-        ["rosrun", "harness", "run_scenario", *map(str, selected), f"--jobs={JOBS}", "--out", out],
+        [
+            "rosrun",
+            "harness",
+            "run_scenario",
+            *families,
+            *(f"--select={n}" for n in selected),
+            f"--jobs={JOBS}",
+            "--out",
+            out,
+        ],  # fmt: skip
         timeout=900 * len(selected) / JOBS,
         stdout=subprocess.DEVNULL,
     )  # its exit code only repeats what the result.json files say
     return out
 
 
-@pytest.mark.parametrize("scenario", SCENARIOS, ids=[p.stem for p in SCENARIOS])
-def test_behaviour_scenario(scenario, results):
-    result = json.loads((results / scenario.stem / "result.json").read_text())
+@pytest.mark.parametrize("run", RUNS)
+def test_behaviour_scenario(run, results):
+    result = json.loads((results / run / "result.json").read_text())
     failed = [f"{c['metric']} = {c['value']} (want {c['rule']})" for c in result["criteria"]
               if not c["passed"]]  # fmt: skip
-    assert not failed, f"{scenario.stem}: " + "; ".join(failed)
+    assert not failed, f"{run}: " + "; ".join(failed)
     # Every run, whatever its own criteria: no command beyond the limits, none non-finite.
     commands = result["metrics"]["commands"]
     assert commands["non_finite"] == 0

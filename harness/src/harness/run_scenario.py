@@ -12,6 +12,7 @@ scenario cannot be run.
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import json
 import os
 import signal
@@ -25,6 +26,7 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
+import yaml
 from tqdm import tqdm
 
 from harness.plot import plot_run
@@ -34,7 +36,7 @@ from harness.scenario import (
     ScenarioError,
     check,
     find_object,
-    load_scenario,
+    load_scenarios,
     metrics,
 )
 from harness.world import WorldError, load_world
@@ -117,6 +119,8 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
     env["ROS_LOG_DIR"] = str(ros_home / "log")
     record = out / "record.npz"
     record.unlink(missing_ok=True)
+    spec = out / "scenario.yaml"  # the run as the simulator plays it (one member of a matrix)
+    spec.write_text(yaml.safe_dump(scenario.spec, sort_keys=False))
     processes: list[subprocess.Popen] = []
     started = time.monotonic()
     with open(out / "ros.log", "w") as log:
@@ -142,7 +146,7 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
             start(behaviour_command(scenario))
             sim_command = [
-                "rosrun", "harness", "sim", f"_scenario:={scenario.source}", f"_record:={record}",
+                "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip
             if video:
                 sim_command.append(f"_video:={out / 'camera.mp4'}")
@@ -214,7 +218,16 @@ def run_all(scenarios: list[Scenario], out: Path, video: bool = False, jobs: int
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("scenarios", nargs="+", type=Path, help="scenario YAML files")
+    parser.add_argument(
+        "scenarios", nargs="+", type=Path, help="scenario YAML files (plain or family matrices)"
+    )
+    parser.add_argument(
+        "--select",
+        action="append",
+        metavar="PATTERN",
+        help="only the runs whose name matches this shell pattern (repeatable), "
+        "e.g. 'parker_tag/d2_off20_b60' or 'follower/gain*'",
+    )
     parser.add_argument("--out", type=Path, default=Path("out/scenarios"), help="output folder")
     parser.add_argument("--video", action="store_true", help="also write camera.mp4")
     parser.add_argument(
@@ -225,10 +238,17 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--jobs must be at least 1, got {args.jobs}")
 
     try:
-        scenarios = [load_scenario(p) for p in args.scenarios]
+        scenarios = [s for p in args.scenarios for s in load_scenarios(p)]
     except (ScenarioError, WorldError) as error:
         print(f"run_scenario: {error}", file=sys.stderr)
         return 2
+    if args.select:
+        scenarios = [
+            s for s in scenarios if any(fnmatch.fnmatchcase(s.name, p) for p in args.select)
+        ]
+        if not scenarios:
+            print(f"run_scenario: no run matches {' or '.join(args.select)}", file=sys.stderr)
+            return 2
     results = run_all(scenarios, args.out, args.video, args.jobs)
     summary = write_summary(args.out, results)
     width = max(len(r["scenario"]) for r in results)
