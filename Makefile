@@ -15,7 +15,7 @@ export ROS_HOME := $(BUILD)/ros_home
 export FOLLOW_BOT_VENV := $(VENV)
 ROSENV := source $(DEVEL)/setup.bash &&
 
-.PHONY: deps build demo test lint format bench clean
+.PHONY: deps build demo test test-full lint format bench clean
 
 deps:
 	tools/install_deps.sh
@@ -39,8 +39,13 @@ lint: deps
 format: deps
 	tools/lint.sh --fix
 
+# test: every suite, with one nominal run of each scenario family plus every fault run;
+# test-full: every run of every scenario family's matrix too.
 test: build lint
 	tools/run_tests.sh
+
+test-full: build lint
+	FULL=1 tools/run_tests.sh
 
 bench: build
 	$(ROSENV) tools/bench.sh

@@ -26,12 +26,29 @@ FAMILIES = {
     family: [s.name for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")]
     for family in FAMILY_SIZES
 }
-RUNS = [name for names in FAMILIES.values() for name in names]
+# `make test` plays these runs: every fault run (camera dropout, a hidden marker) and at least
+# one nominal run of each family; `make test-full` (pytest -m full too) plays every run.
+QUICK = {
+    "follower/lap_fast", "follower/dropout",
+    "dumpster/2m_30deg",
+    "beacons_follow_green/dropout",
+    "beacons_red_stop/plain",
+    "parker_tag/d2_off20_b60", "parker_tag/dropout", "parker_tag/hidden",
+    "parker_sign/d1.2_off-20_b45",
+}  # fmt: skip
+RUNS = [
+    pytest.param(name, marks=() if name in QUICK else pytest.mark.full)
+    for names in FAMILIES.values()
+    for name in names
+]
 JOBS = int(os.environ.get("SCENARIO_JOBS", os.cpu_count() or 1))
 
 
 def test_every_family_has_its_runs():
     assert {family: len(names) for family, names in FAMILIES.items()} == FAMILY_SIZES
+    quick_families = {name.split("/")[0] for name in QUICK}
+    assert {name for names in FAMILIES.values() for name in names} >= QUICK
+    assert quick_families == set(FAMILY_SIZES)
 
 
 @pytest.fixture(scope="session")
