@@ -3,5 +3,5 @@
 
 def pytest_configure(config):
     config.addinivalue_line(
-        "markers", "full: a run only `make test-full` plays (`make test` deselects it, -m 'not full')"
+        "markers", "full: a run only `make test-full` plays (`make test` deselects -m 'not full')"
     )
