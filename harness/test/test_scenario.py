@@ -204,3 +204,35 @@ def test_start_by_intent_is_distance_off_normal_and_bearing():
     assert bearing == pytest.approx(60.0)
     with pytest.raises(ScenarioError, match=r"start\.from: world 'parking' has no object 'nope'"):
         parse_scenario(dict(MINIMAL, world="parking", start=dict(start, **{"from": "nope"})))
+
+
+def test_a_still_since_bound_must_fall_before_the_end():
+    # still_since is "still from then to the end": a bound at the end says only that the last
+    # command was zero.
+    still = {"target": "green", "world": "green_red"}
+    at_end = {"target.still_since": {"max": 2.0}}
+    with pytest.raises(ScenarioError, match=r"criteria\.target\.still_since: needs a max before"):
+        parse_scenario(dict(MINIMAL, **still, criteria=at_end))
+    with pytest.raises(ScenarioError, match=r"criteria\.parking\.still_since: needs a max before"):
+        parse_scenario(dict(MINIMAL, criteria={"parking.still_since": {"min": 0.0}}))
+    before = parse_scenario(dict(MINIMAL, **still, criteria={"target.still_since": {"max": 1.5}}))
+    assert before.criteria[-1] == Criterion("target.still_since", maximum=1.5)
+
+
+def test_lap_progress_counts_only_within_the_cross_track_bound():
+    world = load_world(resolve_world_path("course"))
+    line = world.centreline()
+    closed = np.vstack([line, line[:50]])  # a lap and half a metre
+    t = np.arange(len(closed)) * 0.1
+    heading = np.arctan2(*np.diff(closed, axis=0, append=closed[1:2]).T[::-1])
+    run = {
+        "t": t, "x": closed[:, 0], "y": closed[:, 1], "yaw": heading,
+        "v": np.full_like(t, 0.2), "w": np.zeros_like(t), "frame": np.ones_like(t, dtype=bool),
+        "replies": np.ones_like(t, dtype=int), "missed": np.zeros_like(t, dtype=bool),
+    }  # fmt: skip
+    normal = np.column_stack([-np.sin(heading), np.cos(heading)])
+    off = dict(run, x=closed[:, 0] + 0.1 * normal[:, 0], y=closed[:, 1] + 0.1 * normal[:, 1])
+    bounded = parse_scenario(with_(criteria={"cross_track.max": {"max": 0.05}}))
+    assert metrics(bounded, world, run)["lap"]["complete"] is True
+    assert metrics(bounded, world, off)["lap"]["complete"] is False  # 10 cm off: no progress
+    assert metrics(parse_scenario(MINIMAL), world, off)["lap"]["complete"] is True  # 0.25 m

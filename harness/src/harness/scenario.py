@@ -240,6 +240,16 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
         criteria = runner_criteria(world_path, lockstep)
         criteria.update((c.metric, c) for c in f.get("criteria", _parse_criteria, ()))
         name = f.get("name", string, source.stem if source else "scenario")
+        duration = f.get("duration", number(gt=0.0))
+        for c in criteria.values():
+            # still_since = still from then to the end: a bound at the end says only that the
+            # last command was zero, so it must fall strictly before the end.
+            if c.metric.split(".")[-1] == "still_since" and not (
+                c.maximum is not None and c.maximum < duration
+            ):
+                raise ScenarioError(
+                    f"criteria.{c.metric}: needs a max before the end (duration {duration:g} s)"
+                )
         return Scenario(
             name=name,
             world_path=world_path,
@@ -247,7 +257,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             behaviour=behaviour,
             constant_command=constant,
             rate_hz=f.get("rate_hz", number(gt=0.0, le=1000.0), 30.0),
-            duration=f.get("duration", number(gt=0.0)),
+            duration=duration,
             stop_when=stop_when,
             lockstep=lockstep,
             reply_timeout=f.get("reply_timeout", number(gt=0.0), 2.0),
@@ -397,11 +407,15 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
     if world.ground.lines and len(t):
         centreline = world.centreline()
         out["cross_track"] = scoring.cross_track(path, centreline)
-        out["lap"] = scoring.lap_stats(t, path, centreline)
+        # Progress counts only while on the line: within the run's own cross-track bound.
+        bounds = [c.maximum for c in scenario.criteria if c.metric == "cross_track.max"]
+        on_line = bounds[0] if bounds and bounds[0] is not None else scoring.LAP_MAX_OFFSET
+        out["lap"] = scoring.lap_stats(t, path, centreline, max_offset=on_line)
         out["lap"]["complete"] = out["lap"]["laps"] >= 1
     if scenario.target and len(t):
         obj = find_object(world, scenario.target, "target")
         out["target"] = scoring.stop_distance(path, obj)
+        out["target"]["still_since"] = scoring.still_since(t, run["v"], run["w"])
         centre = object_centre(obj)[:2]
         bearing = math.atan2(centre[1] - path[-1, 1], centre[0] - path[-1, 0]) - path[-1, 2]
         out["target"]["bearing_deg"] = abs(math.degrees(math.remainder(bearing, math.tau)))
