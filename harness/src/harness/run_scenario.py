@@ -62,9 +62,10 @@ def free_port() -> int:
                 return port
 
 
-def wait_for_port(port: int, timeout: float, process: subprocess.Popen) -> bool:
+def wait_for_port(port: int, timeout: float, process: subprocess.Popen | None = None) -> bool:
+    """Whether something listens on `port` within `timeout` (giving up once `process` exits)."""
     deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline and process.poll() is None:
+    while time.monotonic() < deadline and (process is None or process.poll() is None):
         with socket.socket() as s:
             if s.connect_ex(("127.0.0.1", port)) == 0:
                 return True
