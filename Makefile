@@ -15,7 +15,7 @@ export ROS_HOME := $(BUILD)/ros_home
 export FOLLOW_BOT_VENV := $(VENV)
 ROSENV := source $(DEVEL)/setup.bash &&
 
-.PHONY: deps nodes build demo test lint format bench fuzz clean
+.PHONY: deps nodes build demo test test-full lint format bench fuzz clean
 
 deps:
 	tools/install_deps.sh
@@ -34,10 +34,10 @@ build: nodes
 
 # A headless lap of the course with the follower: prints the score, writes the plot and video.
 demo: nodes
-	$(ROSENV) rosrun harness run_scenario worlds/scenarios/follower_lap_default.yaml \
-	  --out $(OUT) --video
-	@echo "demo: plot  $(OUT)/follower_lap_default/run.png"
-	@echo "demo: video $(OUT)/follower_lap_default/camera.mp4"
+	$(ROSENV) rosrun harness run_scenario worlds/scenarios/follower.yaml \
+	  --select follower/lap_default --out $(OUT) --video
+	@echo "demo: plot  $(OUT)/follower/lap_default/run.png"
+	@echo "demo: video $(OUT)/follower/lap_default/camera.mp4"
 
 lint: deps
 	tools/lint.sh
@@ -45,8 +45,13 @@ lint: deps
 format: deps
 	tools/lint.sh --fix
 
+# test: every suite, with one nominal run of each scenario family plus every fault run;
+# test-full: every run of every scenario family's matrix too.
 test: build lint
 	tools/run_tests.sh
+
+test-full: build lint
+	FULL=1 tools/run_tests.sh
 
 bench: build
 	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory follow_bot_bench_nodelets

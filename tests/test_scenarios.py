@@ -1,35 +1,91 @@
 """The behaviours in the closed loop, each judged by its scenario's own criteria.
 
-Every follower_*, dumpster_*, beacons_* and parker_* scenario in worlds/scenarios is played by
-run_scenario (its own roscore, the behaviour's launch file, the simulator in lockstep); the test
-reads result.json and fails with every unmet criterion listed.
+Every run of the scenario families in worlds/scenarios (one file each, a base and a matrix) is
+played by run_scenario: all the selected runs in one call with --jobs (each in its own ROS
+graph: its own roscore, the behaviour's launch file, the simulator in lockstep), then one test
+per run reads its result.json and fails with every unmet criterion listed.
 """
 
 import json
+import os
 import subprocess
 from pathlib import Path
 
 import pytest
 
+from harness.scenario import load_scenarios
+
 SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
-SCENARIOS = sorted(
-    path
-    for pattern in ("follower_*.yaml", "dumpster_*.yaml", "beacons_*.yaml", "parker_*.yaml")
-    for path in SCENARIO_DIR.glob(pattern)
-)
+# How many runs each family's matrix holds: a file that expands to fewer (a lost matrix entry, a
+# renamed file) fails test_every_family_has_its_runs instead of silently running less.
+FAMILY_SIZES = {
+    "follower": 13, "dumpster": 9, "beacons_follow_green": 5, "beacons_red_stop": 4,
+    "parker_tag": 15, "parker_sign": 12,
+}  # fmt: skip
+FAMILIES = {
+    family: [s.name for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")]
+    for family in FAMILY_SIZES
+}
+# `make test` plays these runs: every fault run (camera dropout, a hidden marker) and at least
+# one nominal run of each family; `make test-full` (pytest -m full too) plays every run.
+QUICK = {
+    "follower/lap_fast", "follower/dropout",
+    "dumpster/2m_30deg",
+    "beacons_follow_green/dropout",
+    "beacons_red_stop/plain",
+    "parker_tag/d2_off20_b60", "parker_tag/dropout", "parker_tag/hidden",
+    "parker_sign/d1.2_off-20_b45",
+}  # fmt: skip
+RUNS = [
+    pytest.param(name, marks=() if name in QUICK else pytest.mark.full)
+    for names in FAMILIES.values()
+    for name in names
+]
+JOBS = int(os.environ.get("SCENARIO_JOBS", os.cpu_count() or 1))
 
 
-@pytest.mark.parametrize("scenario", SCENARIOS, ids=[p.stem for p in SCENARIOS])
-def test_behaviour_scenario(scenario, tmp_path):
+def test_every_family_has_its_runs():
+    assert {family: len(names) for family, names in FAMILIES.items()} == FAMILY_SIZES
+    quick_families = {name.split("/")[0] for name in QUICK}
+    assert {name for names in FAMILIES.values() for name in names} >= QUICK
+    assert quick_families == set(FAMILY_SIZES)
+
+
+@pytest.fixture(scope="session")
+def results(request, tmp_path_factory) -> Path:
+    """Plays every run this session selected in one run_scenario call; its output folder."""
+    selected = sorted(
+        {
+            item.callspec.params["run"]
+            for item in request.session.items
+            if getattr(item, "originalname", "") == "test_behaviour_scenario"
+        }
+    )
+    families = sorted({str(SCENARIO_DIR / f"{name.split('/')[0]}.yaml") for name in selected})
+    out = tmp_path_factory.mktemp("scenarios")
     subprocess.run(
-        ["rosrun", "harness", "run_scenario", str(scenario), "--out", str(tmp_path)],
-        timeout=600,
+        [
+            "rosrun",
+            "harness",
+            "run_scenario",
+            *families,
+            *(f"--select={n}" for n in selected),
+            f"--jobs={JOBS}",
+            "--out",
+            out,
+        ],  # fmt: skip
+        timeout=900 * len(selected) / JOBS,
         stdout=subprocess.DEVNULL,
-    )  # its exit code only repeats what result.json says
-    result = json.loads((tmp_path / scenario.stem / "result.json").read_text())
+    )  # its exit code only repeats what the result.json files say
+    return out
+
+
+@pytest.mark.parametrize("run", RUNS)
+def test_behaviour_scenario(run, results):
+    result = json.loads((results / run / "result.json").read_text())
     failed = [f"{c['metric']} = {c['value']} (want {c['rule']})" for c in result["criteria"]
               if not c["passed"]]  # fmt: skip
-    assert not failed, f"{scenario.stem}: " + "; ".join(failed)
+    assert not failed, f"{run}: " + "; ".join(failed)
     # Every run, whatever its own criteria: no command beyond the limits, none non-finite.
     commands = result["metrics"]["commands"]
     assert commands["non_finite"] == 0

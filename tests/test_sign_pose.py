@@ -16,7 +16,7 @@ import pytest
 
 from harness.geometry import incidence_deg, rotation_angle_deg
 from harness.render import Renderer
-from harness.scenario import load_scenario
+from harness.scenario import load_scenarios
 from harness.world import load_world
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"
@@ -151,7 +151,7 @@ def test_no_flips_over_a_fronto_parallel_sweep(scene, tmp_path):
 def test_found_from_every_scenario_start_with_the_sign_in_view(scene, tmp_path):
     """The sign parking scenarios' start frames: found (within 1 cm) iff the sign is in view."""
     world, _, renderer = scene
-    starts = [load_scenario(p).start for p in sorted(SCENARIOS.glob("parker_sign_*.yaml"))]
+    starts = [s.start for s in load_scenarios(SCENARIOS / "parker_sign.yaml")]
     rows = measure(scene, tmp_path, starts, independent=True)
     print_table("scenario start frames", rows)
     for start, r in zip(starts, rows, strict=True):

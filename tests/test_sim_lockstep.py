@@ -69,3 +69,32 @@ def test_every_shipped_world_plays_with_the_scripted_driver(world, tmp_path):
     out = tmp_path / f"drive_{world}"
     assert json.loads((out / "result.json").read_text())["passed"] is True
     assert (out / "run.png").stat().st_size > 10_000
+
+
+def test_parallel_runs_equal_serial_runs(tmp_path):
+    """--jobs 2 plays each scenario in its own ROS graph at the same time as another: lockstep
+    makes every simulated quantity and metric identical to one-at-a-time runs."""
+    parker = tmp_path / "parker_short.yaml"
+    parker.write_text(
+        "name: parker_short\nworld: parking\nstart: {from: goal_tag, distance: 1.0, off_deg: 10}\n"
+        "behaviour: {launch: follow_bot parker.launch}\nduration: 6.0\ngoal: goal_tag\n"
+    )
+    results = {}
+    for jobs in (1, 2):
+        out = tmp_path / f"jobs{jobs}"
+        command = ["rosrun", "harness", "run_scenario", str(SCENARIO), str(parker), "--out", out]
+        subprocess.run([*command, f"--jobs={jobs}"], timeout=600, stdout=subprocess.DEVNULL)
+        summary = json.loads((out / "summary.json").read_text())
+        assert [run["name"] for run in summary["runs"]] == ["constant_arc", "parker_short"]
+        results[jobs] = {
+            name: (dict(np.load(out / name / "record.npz")), run["metrics"])
+            for name, run in zip(("constant_arc", "parker_short"), summary["runs"], strict=True)
+        }
+    for name, (serial_record, serial_metrics) in results[1].items():
+        parallel_record, parallel_metrics = results[2][name]
+        for key in serial_record.keys() - {"loop_wall"}:
+            np.testing.assert_array_equal(serial_record[key], parallel_record[key], err_msg=key)
+        for wall_clock in ("wall_time", "loop_wall_time"):
+            serial_metrics.pop(wall_clock), parallel_metrics.pop(wall_clock)
+        assert serial_metrics == parallel_metrics, name
+    assert results[1]["parker_short"][1]["commands"]["max_abs_v"] > 0  # the parker drove

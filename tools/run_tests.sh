@@ -20,14 +20,18 @@ if ! make -C "$build/catkin" --no-print-directory run_tests >"$build/run_tests.l
   status=1
 fi
 
-echo "== pytest"
-"$venv/bin/python3" -m pytest -q harness/test tests --junitxml="$build/test_results/pytest.xml"
+# FULL=1 (make test-full) also plays the scenario runs marked `full` (tests/test_scenarios.py).
+select=(-m "not full")
+[ "${FULL:-0}" = 1 ] && select=()
+echo "== pytest ${select[*]}"
+"$venv/bin/python3" -m pytest -q "${select[@]}" harness/test tests --junitxml="$build/test_results/pytest.xml"
 rc=$?
 if [ $rc -ne 0 ] && [ $rc -ne 1 ]; then  # 1 = some tests failed, counted from the XML below
   echo "pytest broke (exit $rc)"
   status=1
 fi
 
-/usr/bin/python3 "$repo/tools/test_summary.py" "$build/test_results" "$build/catkin/test_results" ||
+/usr/bin/python3 "$repo/tools/test_summary.py" \
+  catkin="$build/catkin/test_results" pytest="$build/test_results/pytest.xml" ||
   status=1
 exit $status

@@ -1,6 +1,7 @@
 """Scenario parsing, criteria and the ROS-free simulation stepper."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -10,6 +11,7 @@ from harness.scenario import (
     Criterion,
     ScenarioError,
     check,
+    load_scenarios,
     metrics,
     parse_scenario,
     stop_on_sight,
@@ -115,8 +117,13 @@ def test_metrics_report_dropout_stop_delay_and_reply_counts():
     assert values["dropouts"][0]["moving_after_stop"] == 0
     assert values["replies"] == {"frames": 20, "extra": 0, "missing": 0}
     assert "cross_track" in values and "lap" in values
+    # The runner's own criteria come first, the file's replies.extra takes their place.
     assert check(scenario, values) == [
-        {"metric": "replies.extra", "value": 0, "rule": "== 0", "passed": True}
+        {"metric": "commands.non_finite", "value": 0, "rule": "== 0", "passed": True},
+        {"metric": "commands.max_abs_v", "value": 0.2, "rule": "<= 0.7", "passed": True},
+        {"metric": "commands.max_abs_w", "value": 0.0, "rule": "<= 3.14159", "passed": True},
+        {"metric": "replies.missing", "value": 0, "rule": "== 0", "passed": True},
+        {"metric": "replies.extra", "value": 0, "rule": "== 0", "passed": True},
     ]
 
 
@@ -143,3 +150,89 @@ def test_stop_on_sight_times_the_stop_from_the_first_glimpse():
     assert watch["moving_in_view_after_stop"] == 0
     never = stop_on_sight(world, red, dict(run, yaw=np.full_like(t, 3.0)))
     assert never["first_in_view"] is None and never["steps_in_view"] == 0
+
+
+def test_matrix_expands_to_named_runs_over_the_base(tmp_path):
+    family = tmp_path / "fam.yaml"
+    family.write_text(
+        """
+labels: {perturbations.gain: "gain{:g}"}
+base: {world: course, driver: {constant: [0.2, 0.0]}, duration: 2.0,
+       criteria: {lap.complete: {equals: false}}}
+matrix:
+  - perturbations.gain: [0.5, 1.5]
+    duration: {short: 1.0, long: 3.0}
+  - variant:
+      slow: {driver: {constant: [0.1, 0.0]}, criteria: {steps: {min: 1}}}
+"""
+    )
+    runs = {s.name: s for s in load_scenarios(family)}
+    assert list(runs) == [
+        "fam/gain0.5_short", "fam/gain0.5_long", "fam/gain1.5_short", "fam/gain1.5_long",
+        "fam/slow",
+    ]  # fmt: skip
+    assert runs["fam/gain1.5_long"].perturbations.gain == 1.5
+    assert runs["fam/gain1.5_long"].duration == 3.0
+    slow = runs["fam/slow"]
+    assert (slow.constant_command, slow.duration) == ((0.1, 0.0), 2.0)
+    assert slow.perturbations.gain is None
+    assert [c.metric for c in slow.criteria][-2:] == ["lap.complete", "steps"]  # variant adds one
+    assert slow.spec["name"] == "fam/slow" and slow.spec["world"] == str(slow.world_path)
+
+
+@pytest.mark.parametrize(
+    "matrix, words",
+    [
+        ("{perturbations.gain: [0.5]}", "matrix.perturbations.gain: give its values labels"),
+        ("[{duration: {a: 1.0}}, {duration: {a: 2.0}}]", "two runs are named 'fam/a'"),
+    ],
+)
+def test_matrix_errors_name_the_axis(tmp_path, matrix, words):
+    family = tmp_path / "fam.yaml"
+    family.write_text(f"base: {MINIMAL}\nmatrix: {matrix}\n")
+    with pytest.raises(ScenarioError, match=re.escape(words)):
+        load_scenarios(family)
+
+
+def test_start_by_intent_is_distance_off_normal_and_bearing():
+    tag_x, tag_y = 3.0, 0.0  # goal_tag faces -x (yaw pi) in the parking world
+    start = {"from": "goal_tag", "distance": 2.0, "off_deg": 20.0, "bearing_deg": 60.0}
+    x, y, yaw = parse_scenario(dict(MINIMAL, world="parking", start=start)).start
+    assert math.hypot(x - tag_x, y - tag_y) == pytest.approx(2.0)
+    assert math.degrees(math.atan2(y - tag_y, x - tag_x)) == pytest.approx(-160.0)  # pi + 20 deg
+    bearing = math.degrees(math.atan2(tag_y - y, tag_x - x) - yaw)
+    assert bearing == pytest.approx(60.0)
+    with pytest.raises(ScenarioError, match=r"start\.from: world 'parking' has no object 'nope'"):
+        parse_scenario(dict(MINIMAL, world="parking", start=dict(start, **{"from": "nope"})))
+
+
+def test_a_still_since_bound_must_fall_before_the_end():
+    # still_since is "still from then to the end": a bound at the end says only that the last
+    # command was zero.
+    still = {"target": "green", "world": "green_red"}
+    at_end = {"target.still_since": {"max": 2.0}}
+    with pytest.raises(ScenarioError, match=r"criteria\.target\.still_since: needs a max before"):
+        parse_scenario(dict(MINIMAL, **still, criteria=at_end))
+    with pytest.raises(ScenarioError, match=r"criteria\.parking\.still_since: needs a max before"):
+        parse_scenario(dict(MINIMAL, criteria={"parking.still_since": {"min": 0.0}}))
+    before = parse_scenario(dict(MINIMAL, **still, criteria={"target.still_since": {"max": 1.5}}))
+    assert before.criteria[-1] == Criterion("target.still_since", maximum=1.5)
+
+
+def test_lap_progress_counts_only_within_the_cross_track_bound():
+    world = load_world(resolve_world_path("course"))
+    line = world.centreline()
+    closed = np.vstack([line, line[:50]])  # a lap and half a metre
+    t = np.arange(len(closed)) * 0.1
+    heading = np.arctan2(*np.diff(closed, axis=0, append=closed[1:2]).T[::-1])
+    run = {
+        "t": t, "x": closed[:, 0], "y": closed[:, 1], "yaw": heading,
+        "v": np.full_like(t, 0.2), "w": np.zeros_like(t), "frame": np.ones_like(t, dtype=bool),
+        "replies": np.ones_like(t, dtype=int), "missed": np.zeros_like(t, dtype=bool),
+    }  # fmt: skip
+    normal = np.column_stack([-np.sin(heading), np.cos(heading)])
+    off = dict(run, x=closed[:, 0] + 0.1 * normal[:, 0], y=closed[:, 1] + 0.1 * normal[:, 1])
+    bounded = parse_scenario(with_(criteria={"cross_track.max": {"max": 0.05}}))
+    assert metrics(bounded, world, run)["lap"]["complete"] is True
+    assert metrics(bounded, world, off)["lap"]["complete"] is False  # 10 cm off: no progress
+    assert metrics(parse_scenario(MINIMAL), world, off)["lap"]["complete"] is True  # 0.25 m

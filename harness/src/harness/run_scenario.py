@@ -1,56 +1,91 @@
-"""`rosrun harness run_scenario SCENARIO.yaml [...] [--out DIR] [--video]`
+"""`rosrun harness run_scenario SCENARIO.yaml [...] [--jobs N] [--out DIR] [--video]`
 
-Plays each scenario on a ROS master of its own (a free port, so runs never share topics):
-roscore, the behaviour's launch file (or the scripted constant-Twist driver), then the simulator
-in lockstep. Afterwards it scores the recorded run and writes DIR/<scenario>/result.json (all
-metrics and each criterion), run.png (floor map with the driven path) and, with --video,
-camera.mp4. Exits 1 when a criterion fails, 2 when a scenario cannot be run.
+Plays each scenario in a ROS graph of its own: its own roscore on a free port, its own ROS_HOME
+and log folder, the behaviour's launch file (or the scripted constant-Twist driver), then the
+simulator in lockstep; with --jobs N, N scenarios at a time. Afterwards it scores each recorded
+run and writes DIR/<scenario>/result.json (all metrics and each criterion), run.png (floor map
+with the driven path) and, with --video, camera.mp4; DIR/summary.json and DIR/report.md add up
+all runs (success rate with its 95 % Wilson interval). Exits 1 when a criterion fails, 2 when a
+scenario cannot be run.
 """
 
 from __future__ import annotations
 
 import argparse
+import fnmatch
 import json
 import os
 import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
+import xmlrpc.client
+from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 
 import numpy as np
+import yaml
+from tqdm import tqdm
 
 from harness.plot import plot_run
+from harness.report import format_value, headline, write_summary
 from harness.scenario import (
     Scenario,
     ScenarioError,
     check,
     find_object,
-    load_scenario,
+    load_scenarios,
     metrics,
 )
 from harness.world import WorldError, load_world
 
 MASTER_START_TIMEOUT = 20.0  # wall s
+MASTER_START_ATTEMPTS = 3  # a port another program takes between our probe and roscore's bind
 # Wall-clock allowance on top of the scenario's sim duration (start-up, slow machines).
 RUN_TIMEOUT_FLOOR = 120.0
 
+_ports_lock = threading.Lock()
+_ports_handed_out: set[int] = set()
+
 
 def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A port the OS calls free and that no other run of this process was given."""
+    while True:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        with _ports_lock:
+            if port not in _ports_handed_out:
+                _ports_handed_out.add(port)
+                return port
 
 
-def wait_for_port(port: int, timeout: float) -> bool:
+def wait_for_port(port: int, timeout: float, process: subprocess.Popen | None = None) -> bool:
+    """Whether something listens on `port` within `timeout` (giving up once `process` exits)."""
     deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and (process is None or process.poll() is None):
         with socket.socket() as s:
             if s.connect_ex(("127.0.0.1", port)) == 0:
                 return True
         time.sleep(0.05)
     return False
+
+
+def parent_pid(pid: int) -> int:
+    with open(f"/proc/{pid}/stat") as stat:
+        return int(stat.read().rsplit(")", 1)[1].split()[1])
+
+
+def master_is_ours(port: int, roscore: subprocess.Popen) -> bool:
+    """The master answering on `port` is the rosmaster our roscore started (not another run's:
+    a free port can be taken by another process between the probe and roscore's bind)."""
+    try:
+        code, _, pid = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}").getPid("/run_scenario")
+        return code == 1 and parent_pid(pid) == roscore.pid
+    except (OSError, xmlrpc.client.Error, ValueError, IndexError):
+        return False
 
 
 def stop(process: subprocess.Popen | None, timeout: float = 10.0) -> None:
@@ -76,13 +111,17 @@ def behaviour_command(scenario: Scenario) -> list[str]:
 
 
 def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
-    """Runs one scenario end to end; returns the result written to result.json."""
+    """Runs one scenario end to end in a ROS graph of its own; returns the result written to
+    result.json."""
     out.mkdir(parents=True, exist_ok=True)
     world = load_world(scenario.world_path)
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_IP="127.0.0.1")
+    ros_home = out / "ros_home"
+    env = dict(os.environ, ROS_IP="127.0.0.1", ROS_HOME=str(ros_home))
+    env["ROS_LOG_DIR"] = str(ros_home / "log")
     record = out / "record.npz"
     record.unlink(missing_ok=True)
+    spec = out / "scenario.yaml"  # the run as the simulator plays it (one member of a matrix)
+    spec.write_text(yaml.safe_dump(scenario.spec, sort_keys=False))
     processes: list[subprocess.Popen] = []
     started = time.monotonic()
     with open(out / "ros.log", "w") as log:
@@ -95,13 +134,20 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
             return process
 
         try:
-            start(["roscore", "-p", str(port)])
-            if not wait_for_port(port, MASTER_START_TIMEOUT):
-                raise RuntimeError(f"roscore did not start on port {port} (see {out}/ros.log)")
+            for _ in range(MASTER_START_ATTEMPTS):
+                port = free_port()
+                env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+                roscore = start(["roscore", "-p", str(port)])
+                up = wait_for_port(port, MASTER_START_TIMEOUT, roscore)
+                if up and master_is_ours(port, roscore):
+                    break
+                stop(roscore)
+            else:
+                raise RuntimeError(f"roscore did not start (see {out}/ros.log)")
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
             start(behaviour_command(scenario))
             sim_command = [
-                "rosrun", "harness", "sim", f"_scenario:={scenario.source}", f"_record:={record}",
+                "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip
             if video:
                 sim_command.append(f"_video:={out / 'camera.mp4'}")
@@ -135,65 +181,98 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
     return result
 
 
-def headline(values: dict) -> dict:
-    """The few numbers worth a plot title and a summary row."""
-    picks = {
-        "lap_time": values.get("lap", {}).get("lap_time"),
-        "xte_rms_cm": 100 * values["cross_track"]["rms"] if "cross_track" in values else None,
-        "xte_max_cm": 100 * values["cross_track"]["max"] if "cross_track" in values else None,
-        "stop_dist": values.get("target", {}).get("final_distance"),
-        "park_err_cm": 100 * values["parking"]["position_error"] if "parking" in values else None,
-        "missed": values["commands"]["missed_replies"],
-        "sim_s": values["sim_time"],
-        "wall_s": values.get("wall_time"),
-    }
-    return {k: v for k, v in picks.items() if v is not None}
+def play(scenario: Scenario, out: Path, video: bool) -> dict:
+    """run_one's result, or an error entry when the scenario could not be run."""
+    try:
+        return run_one(scenario, out / scenario.name, video)
+    except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
+        return {"scenario": scenario.name, "passed": False, "error": str(error)}
 
 
-def format_value(value) -> str:
-    return f"{value:.4g}" if isinstance(value, float) else str(value)
+def describe(result: dict) -> list[str]:
+    """The lines printed for one finished run."""
+    if "error" in result:
+        return [f"{result['scenario']}: ERROR {result['error']}"]
+    lines = [f"{result['scenario']}:"]
+    for row in result["criteria"]:
+        mark = "ok  " if row["passed"] else "FAIL"
+        lines.append(f"  {mark} {row['metric']} = {format_value(row['value'])} ({row['rule']})")
+    numbers = ", ".join(f"{k}={format_value(v)}" for k, v in headline(result["metrics"]).items())
+    lines.append(f"  {'PASS' if result['passed'] else 'FAIL'} {numbers}")
+    return lines
+
+
+def run_all(scenarios: list[Scenario], out: Path, video: bool = False, jobs: int = 1) -> list[dict]:
+    """Every scenario's result (in the given order), `jobs` at a time, with a progress bar."""
+    results: list[dict | None] = [None] * len(scenarios)
+    with (
+        ThreadPoolExecutor(max_workers=jobs) as pool,
+        tqdm(total=len(scenarios), unit="run", file=sys.stderr) as progress,
+    ):
+        futures = {pool.submit(play, s, out, video): i for i, s in enumerate(scenarios)}
+        for future in as_completed(futures):
+            result = results[futures[future]] = future.result()
+            progress.write("\n".join(describe(result)))
+            progress.update()
+    return results
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("scenarios", nargs="+", type=Path, help="scenario YAML files")
+    parser.add_argument(
+        "scenarios", nargs="+", type=Path, help="scenario YAML files (plain or family matrices)"
+    )
+    parser.add_argument(
+        "--select",
+        action="append",
+        metavar="PATTERN",
+        help="only the runs whose name matches this shell pattern (repeatable), "
+        "e.g. 'parker_tag/d2_off20_b60' or 'follower/gain*'",
+    )
     parser.add_argument("--out", type=Path, default=Path("out/scenarios"), help="output folder")
     parser.add_argument("--video", action="store_true", help="also write camera.mp4")
+    parser.add_argument(
+        "--jobs", type=int, default=1, help="scenarios run at once, each in its own ROS graph"
+    )
     args = parser.parse_args(argv)
+    if args.jobs < 1:
+        parser.error(f"--jobs must be at least 1, got {args.jobs}")
 
     try:
-        scenarios = [load_scenario(p) for p in args.scenarios]
+        scenarios = [s for p in args.scenarios for s in load_scenarios(p)]
     except (ScenarioError, WorldError) as error:
         print(f"run_scenario: {error}", file=sys.stderr)
         return 2
-    summary = []
-    status = 0
-    for index, scenario in enumerate(scenarios, 1):
-        print(f"[{index}/{len(scenarios)}] {scenario.name} ...", flush=True)
-        try:
-            result = run_one(scenario, args.out / scenario.name, args.video)
-        except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
-            print(f"  ERROR {error}", flush=True)
-            summary.append((scenario.name, "ERROR", str(error)))
-            status = max(status, 2)
-            continue
-        verdict = "PASS" if result["passed"] else "FAIL"
-        for row in result["criteria"]:
-            mark = "ok  " if row["passed"] else "FAIL"
-            print(f"  {mark} {row['metric']} = {format_value(row['value'])} ({row['rule']})")
-        numbers = ", ".join(
-            f"{k}={format_value(v)}" for k, v in headline(result["metrics"]).items()
-        )
-        print(f"  {verdict} {numbers}", flush=True)
-        summary.append((scenario.name, verdict, numbers))
-        if not result["passed"]:
-            status = max(status, 1)
-    width = max(len(name) for name, _, _ in summary)
+    if args.select:
+        scenarios = [
+            s for s in scenarios if any(fnmatch.fnmatchcase(s.name, p) for p in args.select)
+        ]
+        if not scenarios:
+            print(f"run_scenario: no run matches {' or '.join(args.select)}", file=sys.stderr)
+            return 2
+    results = run_all(scenarios, args.out, args.video, args.jobs)
+    summary = write_summary(args.out, results)
+    width = max(len(r["scenario"]) for r in results)
     print("\nsummary")
-    for name, verdict, numbers in summary:
-        print(f"  {name:<{width}}  {verdict:<5}  {numbers}")
-    print(f"results in {args.out}")
-    return status
+    for result in results:
+        if "error" in result:
+            verdict, numbers = "ERROR", result["error"]
+        else:
+            verdict = "PASS" if result["passed"] else "FAIL"
+            numbers = ", ".join(
+                f"{k}={format_value(v)}" for k, v in headline(result["metrics"]).items()
+            )
+        print(f"  {result['scenario']:<{width}}  {verdict:<5}  {numbers}")
+    overall = summary["overall"]
+    low, high = overall["success_interval_95"]
+    print(
+        f"{overall['passed']}/{overall['runs']} passed ({overall['errors']} could not run), "
+        f"success rate {overall['success_rate']:.3f} (95 % Wilson interval {low:.3f}-{high:.3f})"
+    )
+    print(f"results in {args.out} (summary.json, report.md)")
+    if overall["errors"]:
+        return 2
+    return 0 if overall["passed"] == overall["runs"] else 1
 
 
 if __name__ == "__main__":

@@ -1,14 +1,19 @@
-"""Scenario files (tests/scenarios/*.yaml): what to run, what to disturb, what must hold.
+"""Scenario files (worlds/scenarios/*.yaml): what to run, what to disturb, what must hold.
 
 A scenario names a world, the behaviour to launch (or a built-in scripted driver), a duration
-and stop condition, perturbations and pass criteria over the metrics of `metrics()`. Schema in
-worlds/SCHEMA.md. Everything is validated on load; errors name the field.
+and stop condition, perturbations and pass criteria over the metrics of `metrics()`. A family
+file holds many: a `base` run and a `matrix` whose cartesian product of field values (or a list
+of such products) gives one named run each. Every run also gets the runner's own criteria (no
+non-finite command, none beyond the world robot's limits, one reply per frame in lockstep).
+Schema in worlds/SCHEMA.md. Everything is validated on load; errors name the field.
 """
 
 from __future__ import annotations
 
+import copy
+import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +32,7 @@ from harness.validation import (
     string,
     vector,
 )
-from harness.world import Box, Sphere, World, WorldError, resolve_world_path
+from harness.world import Box, Sphere, World, WorldError, load_world, resolve_world_path
 
 STOP_CONDITIONS = ("duration", "lap_complete")
 
@@ -98,6 +103,7 @@ class Scenario:
     standoff: float
     criteria: tuple[Criterion, ...]
     source: Path | None = None
+    spec: dict = field(default_factory=dict, compare=False)  # the run's own fields, as parsed
 
 
 def _world_file(value: Any, where: str, base: Path) -> Path:
@@ -177,6 +183,41 @@ def _parse_criteria(value: Any, where: str) -> tuple[Criterion, ...]:
     return tuple(out)
 
 
+def _start_pose(value: Any, where: str, world_path: Path) -> tuple[float, float, float]:
+    """[x, y, yaw], or {from, distance, off_deg, bearing_deg}: `distance` m from the centre of
+    the marker or box `from`, `off_deg` counter-clockwise off its facing direction (its normal),
+    with the object `bearing_deg` to the left of the heading (0: straight ahead)."""
+    if not isinstance(value, dict):
+        return vector(3)(value, where)
+    f = Fields(value, where, {"from", "distance", "off_deg", "bearing_deg"})
+    name = f.get("from", string)
+    distance = f.get("distance", number(gt=0.0))
+    off = math.radians(f.get("off_deg", number(), 0.0))
+    bearing = math.radians(f.get("bearing_deg", number(), 0.0))
+    obj = find_object(load_world(world_path), name, f.where("from"))
+    if isinstance(obj, Sphere):
+        raise ScenarioError(f"{f.where('from')}: {name!r} is a sphere, which faces no way")
+    facing = obj.pose[2] if isinstance(obj, Box) else obj.pose[3]
+    cx, cy = object_centre(obj)[:2]
+    x = cx + distance * math.cos(facing + off)
+    y = cy + distance * math.sin(facing + off)
+    return (x, y, math.remainder(math.atan2(cy - y, cx - x) - bearing, math.tau))
+
+
+def runner_criteria(world_path: Path, lockstep: bool) -> dict[str, Criterion]:
+    """What every run must meet, whatever its file says: finite commands within the world
+    robot's limits and, in lockstep, exactly one reply to every frame."""
+    robot = load_world(world_path).robot
+    rules = [
+        Criterion("commands.non_finite", equals=0),
+        Criterion("commands.max_abs_v", maximum=robot.max_v),
+        Criterion("commands.max_abs_w", maximum=robot.max_w),
+    ]
+    if lockstep:
+        rules += [Criterion("replies.missing", equals=0), Criterion("replies.extra", equals=0)]
+    return {c.metric: c for c in rules}
+
+
 def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = None) -> Scenario:
     base = Path(base_dir)
     allowed = {
@@ -194,31 +235,107 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
         stop_when = f.get("stop_when", string, "duration")
         if stop_when not in STOP_CONDITIONS:
             raise ScenarioError(f"stop_when: must be one of {', '.join(STOP_CONDITIONS)}")
+        world_path = f.get("world", lambda v, w: _world_file(v, w, base))
+        lockstep = f.get("lockstep", boolean, True)
+        criteria = runner_criteria(world_path, lockstep)
+        criteria.update((c.metric, c) for c in f.get("criteria", _parse_criteria, ()))
+        name = f.get("name", string, source.stem if source else "scenario")
+        duration = f.get("duration", number(gt=0.0))
+        for c in criteria.values():
+            # still_since = still from then to the end: a bound at the end says only that the
+            # last command was zero, so it must fall strictly before the end.
+            if c.metric.split(".")[-1] == "still_since" and not (
+                c.maximum is not None and c.maximum < duration
+            ):
+                raise ScenarioError(
+                    f"criteria.{c.metric}: needs a max before the end (duration {duration:g} s)"
+                )
         return Scenario(
-            name=f.get("name", string, source.stem if source else "scenario"),
-            world_path=f.get("world", lambda v, w: _world_file(v, w, base)),
-            start=f.get("start", vector(3), None),
+            name=name,
+            world_path=world_path,
+            start=f.get("start", lambda v, w: _start_pose(v, w, world_path), None),
             behaviour=behaviour,
             constant_command=constant,
             rate_hz=f.get("rate_hz", number(gt=0.0, le=1000.0), 30.0),
-            duration=f.get("duration", number(gt=0.0)),
+            duration=duration,
             stop_when=stop_when,
-            lockstep=f.get("lockstep", boolean, True),
+            lockstep=lockstep,
             reply_timeout=f.get("reply_timeout", number(gt=0.0), 2.0),
             perturbations=f.section("perturbations", _parse_perturbations),
             target=f.get("target", string, None),
             watch=f.get("watch", string, None),
             goal=f.get("goal", string, None),
             standoff=f.get("standoff", number(gt=0.0), 0.5),
-            criteria=f.get("criteria", _parse_criteria, ()),
+            criteria=tuple(criteria.values()),
             source=source,
+            spec={**data, "name": name, "world": str(world_path)},
         )
-    except ValidationError as error:
+    except (ValidationError, WorldError) as error:
         where = f"{source}: " if source else ""
         raise ScenarioError(f"{where}{error}") from None
 
 
-def load_scenario(path: Path | str) -> Scenario:
+def merged(under: dict, over: dict) -> dict:
+    """`under` with `over` laid on top: mappings merge key by key, anything else is replaced."""
+    out = copy.deepcopy(under)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merged(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def _axis(path: str, values: Any, labels: dict, where: str) -> list[tuple[str, Any]]:
+    """One matrix axis as (label, value) pairs: labelled values ({label: value}), or a list
+    labelled by the file's `labels.<path>` format (fields of a mapping value by name)."""
+    if isinstance(values, dict):
+        return [(str(label), value) for label, value in values.items()]
+    items = sequence(values, where, min_len=1)
+    if path not in labels:
+        raise ScenarioError(f"{where}: give its values labels ({{label: value}}) or labels.{path}")
+    fmt = string(labels[path], f"labels.{path}")
+    try:
+        return [(fmt.format(**v) if isinstance(v, dict) else fmt.format(v), v) for v in items]
+    except (KeyError, IndexError, ValueError) as error:
+        raise ScenarioError(f"labels.{path}: {fmt!r} does not fit the values: {error}") from None
+
+
+def expand(data: Any, family: str) -> list[dict]:
+    """A file's runs as plain scenario mappings, each with its generated `name`
+    `<family>/<label>_<label>…`. A file without `matrix` is one run as written."""
+    if not (isinstance(data, dict) and "matrix" in data):
+        return [data]
+    f = Fields(data, "", {"base", "matrix", "labels"})
+    base = f.get("base", mapping, {})
+    labels = f.get("labels", mapping, {})
+    blocks = f.data["matrix"]
+    blocks = [blocks] if isinstance(blocks, dict) else sequence(blocks, "matrix", min_len=1)
+    runs: dict[str, dict] = {}
+    for i, block in enumerate(blocks):
+        where = f"matrix[{i}]" if len(blocks) > 1 else "matrix"
+        axes = [(path, _axis(str(path), values, labels, f"{where}.{path}"))
+                for path, values in mapping(block, where).items()]  # fmt: skip
+        for combination in itertools.product(*(values for _, values in axes)):
+            run = copy.deepcopy(base)
+            for (path, _), (_, value) in zip(axes, combination, strict=True):
+                if path == "variant":  # a named set of fields laid over the base
+                    run = merged(run, mapping(value, f"{where}.variant"))
+                    continue
+                *parents, leaf = str(path).split(".")
+                node = run
+                for key in parents:
+                    node = node.setdefault(key, {})
+                node[leaf] = copy.deepcopy(value)
+            name = f"{family}/" + "_".join(label for label, _ in combination)
+            if name in runs:
+                raise ScenarioError(f"{where}: two runs are named {name!r}")
+            runs[name] = {**run, "name": name}
+    return list(runs.values())
+
+
+def load_scenarios(path: Path | str) -> list[Scenario]:
+    """Every run a scenario file holds (one for a plain file, the matrix's for a family)."""
     p = Path(path)
     try:
         data = yaml.safe_load(p.read_text(encoding="utf-8"))
@@ -226,7 +343,19 @@ def load_scenario(path: Path | str) -> Scenario:
         raise ScenarioError(f"{p}: cannot read scenario file: {error.strerror}") from None
     except yaml.YAMLError as error:
         raise ScenarioError(f"{p}: not valid YAML: {error}") from None
-    return parse_scenario(data, p.parent, p.resolve())
+    try:
+        runs = expand(data, p.stem)
+    except ValidationError as error:
+        raise ScenarioError(f"{p}: {error}") from None
+    return [parse_scenario(run, p.parent, p.resolve()) for run in runs]
+
+
+def load_scenario(path: Path | str) -> Scenario:
+    """The one run of a plain scenario file."""
+    scenarios = load_scenarios(path)
+    if len(scenarios) != 1:
+        raise ScenarioError(f"{path}: holds {len(scenarios)} runs; pick one by name")
+    return scenarios[0]
 
 
 def find_object(world: World, name: str, field: str):
@@ -278,11 +407,15 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
     if world.ground.lines and len(t):
         centreline = world.centreline()
         out["cross_track"] = scoring.cross_track(path, centreline)
-        out["lap"] = scoring.lap_stats(t, path, centreline)
+        # Progress counts only while on the line: within the run's own cross-track bound.
+        bounds = [c.maximum for c in scenario.criteria if c.metric == "cross_track.max"]
+        on_line = bounds[0] if bounds and bounds[0] is not None else scoring.LAP_MAX_OFFSET
+        out["lap"] = scoring.lap_stats(t, path, centreline, max_offset=on_line)
         out["lap"]["complete"] = out["lap"]["laps"] >= 1
     if scenario.target and len(t):
         obj = find_object(world, scenario.target, "target")
         out["target"] = scoring.stop_distance(path, obj)
+        out["target"]["still_since"] = scoring.still_since(t, run["v"], run["w"])
         centre = object_centre(obj)[:2]
         bearing = math.atan2(centre[1] - path[-1, 1], centre[0] - path[-1, 0]) - path[-1, 2]
         out["target"]["bearing_deg"] = abs(math.degrees(math.remainder(bearing, math.tau)))

@@ -14,6 +14,8 @@ from harness.world import AprilTagMarker, Box, Sphere, TextureMarker, WorldObjec
 
 # TurtleBot 2 (Kobuki) base radius: the gap to an obstacle is measured from the bumper.
 ROBOT_RADIUS_M = 0.177
+# Lap progress counts while the base is within this of the line (m), unless told a bound.
+LAP_MAX_OFFSET = 0.25
 
 
 def _xy(path) -> np.ndarray:
@@ -41,7 +43,7 @@ def progress(
     centreline: np.ndarray,
     closed: bool = True,
     *,
-    max_offset: float = 0.25,
+    max_offset: float = LAP_MAX_OFFSET,
     max_step: float = 1.0,
 ) -> np.ndarray:
     """Signed distance travelled along the line since the first sample (one per sample).
@@ -63,7 +65,7 @@ def progress(
     return np.concatenate([[0.0], np.cumsum(step)])
 
 
-def lap_stats(t, path, centreline: np.ndarray, *, max_offset: float = 0.25) -> dict:
+def lap_stats(t, path, centreline: np.ndarray, *, max_offset: float = LAP_MAX_OFFSET) -> dict:
     """Loop progress, completed laps and the time of the first full lap (None if none).
 
     A lap is complete when |progress| reaches the loop length, in either direction.
