@@ -121,6 +121,65 @@ TEST_F(SignDetectorTest, NoFlipsOverAFrontoParallelSweep) {
   EXPECT_EQ(frames, 45);
 }
 
+// A sign moving ~10 px and turning a little per frame: every frame after the first is tracked,
+// and its pose stays within the accuracy bounds (1 cm; the angle of a fresh detector's plus
+// 0.5 deg, which covers the face-on far tilt that neither observes).
+TEST_F(SignDetectorTest, TracksAMovingSignAsAccuratelyAsSearching) {
+  SignDetector tracking(config());
+  for (int i = 0; i < 20; ++i) {
+    const cv::Matx33d rotation = rotationY(rad(20.0 - 1.5 * i));
+    const cv::Vec3d translation(-0.3 + 0.03 * i, 0.02, 2.0 - 0.05 * i);
+    const cv::Mat frame = renderSign(reference_, camera_, rotation, translation, 2.0, i + 1);
+    const auto seen = tracking.detect(frame, camera_);
+    ASSERT_TRUE(seen) << i;
+    EXPECT_EQ(tracking.lastTracked(), i > 0) << i;
+    SignDetector searching(config());
+    const auto searched = searching.detect(frame, camera_);
+    ASSERT_TRUE(searched) << i;
+    EXPECT_FALSE(searching.lastTracked());
+    EXPECT_LT(cv::norm(seen->translation - translation), 0.01) << i;
+    EXPECT_LT(deg(angleBetween(seen->rotation, rotation)),
+              deg(angleBetween(searched->rotation, rotation)) + 0.5)
+        << i;
+  }
+}
+
+TEST_F(SignDetectorTest, SearchesAgainAfterTheSignDisappearsOrJumps) {
+  SignDetector detector(config());
+  const cv::Vec3d left(-0.3, 0.0, 1.5), right(0.35, 0.0, 1.5);
+  const cv::Matx33d face_on = cv::Matx33d::eye();
+  ASSERT_TRUE(detector.detect(renderSign(reference_, camera_, face_on, left, 2.0, 1), camera_));
+  ASSERT_TRUE(detector.detect(renderSign(reference_, camera_, face_on, left, 2.0, 2), camera_));
+  EXPECT_TRUE(detector.lastTracked());
+  // Gone: nothing, then found again by the search.
+  EXPECT_FALSE(detector.detect(cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(128)), camera_));
+  EXPECT_FALSE(detector.lastTracked());
+  auto seen = detector.detect(renderSign(reference_, camera_, face_on, left, 2.0, 3), camera_);
+  ASSERT_TRUE(seen);
+  EXPECT_FALSE(detector.lastTracked());
+  EXPECT_LT(cv::norm(seen->translation - left), 0.01);
+  // Jumped further than tracking reaches: found by the search, where it now is.
+  seen = detector.detect(renderSign(reference_, camera_, face_on, right, 2.0, 4), camera_);
+  ASSERT_TRUE(seen);
+  EXPECT_FALSE(detector.lastTracked());
+  EXPECT_LT(cv::norm(seen->translation - right), 0.01);
+  seen = detector.detect(renderSign(reference_, camera_, face_on, right, 2.0, 5), camera_);
+  ASSERT_TRUE(seen);
+  EXPECT_TRUE(detector.lastTracked());
+}
+
+TEST_F(SignDetectorTest, AFrameOfAnotherSizeStartsAfresh) {
+  SignDetector detector(config());
+  const cv::Vec3d ahead(0.0, 0.0, 1.5);
+  ASSERT_TRUE(detector.detect(renderSign(reference_, camera_, cv::Matx33d::eye(), ahead), camera_));
+  const cv::Mat larger =
+      renderSign(reference_, camera_, cv::Matx33d::eye(), ahead, 0.0, 1, cv::Size(800, 600));
+  ASSERT_TRUE(detector.detect(larger, camera_));
+  EXPECT_FALSE(detector.lastTracked());
+  ASSERT_TRUE(detector.detect(larger, camera_));
+  EXPECT_TRUE(detector.lastTracked());
+}
+
 TEST_F(SignDetectorTest, NothingInBlankOrNoiseImages) {
   SignDetector detector(config());
   EXPECT_FALSE(detector.detect(cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(128)), camera_));
@@ -180,6 +239,13 @@ TEST_F(SignDetectorTest, StartupErrors) {
   SignDetectorConfig few_inliers = config();
   few_inliers.min_inliers = 3;
   EXPECT_NE(expectThrow(few_inliers).find("min_inliers must be >= 4"), std::string::npos);
+  SignDetectorConfig unaligned_tracking = config();
+  unaligned_tracking.refine_passes = 0;
+  EXPECT_NE(expectThrow(unaligned_tracking).find("track needs refine_passes >= 1"),
+            std::string::npos);
+  SignDetectorConfig far_motion = config();
+  far_motion.max_track_motion_px = 0.0;
+  EXPECT_NE(expectThrow(far_motion).find("max_track_motion_px must be > 0"), std::string::npos);
 
   EXPECT_GE(SignDetector(config()).referenceFeatures(), config().min_reference_features);
 }
