@@ -6,6 +6,8 @@ echo "== follower line detector vs the lecture's algorithm (same frames, one thr
 "$repo/build/devel/lib/follow_bot/line_detector_bench"
 echo "== parker tag detection + pose vs a bare ViSP vpDetectorAprilTag::detect (same frames, one thread)"
 "$repo/build/devel/lib/follow_bot/tag_detector_bench"
+echo "== parker sign detector tracking vs searching every frame (same frames, one thread, CPU time)"
+"$repo/build/devel/lib/follow_bot/sign_tracking_bench"
 echo "== harness"
 "$repo/harness/scripts/run_python" harness.bench
 echo "== follower image -> cmd_vel latency, across processes and between nodelets (probe nodelet)"

@@ -11,74 +11,26 @@
 #include <string>
 #include <vector>
 
+#include "synthetic_sign.h"
+
 namespace follow_bot {
 namespace {
 
+using test::angleBetween;
+using test::kSignWidthM;
+using test::renderSign;
+using test::rotationX;
+using test::rotationY;
+
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kSignWidthM = 0.40;  // worlds/parking_sign.yaml
-constexpr int kWidth = 640;
-constexpr int kHeight = 480;
-constexpr int kSupersample = 4;
+constexpr int kWidth = test::kSignFrameWidth;
+constexpr int kHeight = test::kSignFrameHeight;
 
 double deg(double rad) { return rad * 180.0 / kPi; }
 double rad(double deg) { return deg * kPi / 180.0; }
 
 // Pinhole intrinsics of the harness camera (640x480, 60 deg HFOV); the rest is unused here.
 CameraGeometry harnessCamera() { return CameraGeometry{}; }
-
-cv::Matx33d rotationY(double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return {c, 0, s, 0, 1, 0, -s, 0, c};
-}
-
-cv::Matx33d rotationX(double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  return {1, 0, 0, 0, c, -s, 0, s, c};
-}
-
-double angleBetween(const cv::Matx33d& a, const cv::Matx33d& b) {
-  const double c = (cv::trace(a.t() * b) - 1.0) / 2.0;
-  return std::acos(std::max(-1.0, std::min(1.0, c)));
-}
-
-// The sign seen by the camera with the sign frame at (rotation, translation) in the optical
-// frame: an exact plane homography K [r1 r2 t] of a mip level of the picture, sampled on a 4x
-// finer grid and box-filtered down, on a grey background (what the harness renderer does).
-cv::Mat renderSign(const cv::Mat& reference, const CameraGeometry& camera,
-                   const cv::Matx33d& rotation, const cv::Vec3d& translation,
-                   double noise_sigma = 0.0) {
-  const double projected_width = camera.fx * kSignWidthM / translation[2];
-  cv::Mat level = reference;
-  while (level.cols > projected_width * kSupersample && level.cols >= 32) {
-    cv::resize(level, level, cv::Size(level.cols / 2, level.rows / 2), 0, 0, cv::INTER_AREA);
-  }
-  const double m = kSignWidthM / level.cols;  // metres per texel
-  const double height = m * level.rows;
-  const cv::Matx33d texel_to_plane(m, 0, 0.5 * m - kSignWidthM / 2, 0, m, 0.5 * m - height / 2, 0,
-                                   0, 1);
-  const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-  const cv::Matx33d plane_to_image(rotation(0, 0), rotation(0, 1), translation[0], rotation(1, 0),
-                                   rotation(1, 1), translation[1], rotation(2, 0), rotation(2, 1),
-                                   translation[2]);
-  // Fine sample f sits at coarse pixel (f + 0.5) / s - 0.5 (pixel centres at integers).
-  const double s = kSupersample;
-  const cv::Matx33d coarse_to_fine(s, 0, (s - 1) / 2, 0, s, (s - 1) / 2, 0, 0, 1);
-  cv::Mat fine;
-  cv::warpPerspective(level, fine, cv::Mat(coarse_to_fine * k * plane_to_image * texel_to_plane),
-                      cv::Size(kWidth * kSupersample, kHeight * kSupersample), cv::INTER_LINEAR,
-                      cv::BORDER_CONSTANT, cv::Scalar(128));
-  cv::Mat frame;
-  cv::resize(fine, frame, cv::Size(kWidth, kHeight), 0, 0, cv::INTER_AREA);
-  if (noise_sigma > 0.0) {
-    cv::Mat noise(frame.size(), CV_32F);
-    cv::RNG rng(12345);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_sigma);
-    frame.convertTo(frame, CV_32F);
-    frame += noise;
-    frame.convertTo(frame, CV_8U);
-  }
-  return frame;
-}
 
 class SignDetectorTest : public ::testing::Test {
  protected:
@@ -169,6 +121,65 @@ TEST_F(SignDetectorTest, NoFlipsOverAFrontoParallelSweep) {
   EXPECT_EQ(frames, 45);
 }
 
+// A sign moving ~10 px and turning a little per frame: every frame after the first is tracked,
+// and its pose stays within the accuracy bounds (1 cm; the angle of a fresh detector's plus
+// 0.5 deg, which covers the face-on far tilt that neither observes).
+TEST_F(SignDetectorTest, TracksAMovingSignAsAccuratelyAsSearching) {
+  SignDetector tracking(config());
+  for (int i = 0; i < 20; ++i) {
+    const cv::Matx33d rotation = rotationY(rad(20.0 - 1.5 * i));
+    const cv::Vec3d translation(-0.3 + 0.03 * i, 0.02, 2.0 - 0.05 * i);
+    const cv::Mat frame = renderSign(reference_, camera_, rotation, translation, 2.0, i + 1);
+    const auto seen = tracking.detect(frame, camera_);
+    ASSERT_TRUE(seen) << i;
+    EXPECT_EQ(tracking.lastTracked(), i > 0) << i;
+    SignDetector searching(config());
+    const auto searched = searching.detect(frame, camera_);
+    ASSERT_TRUE(searched) << i;
+    EXPECT_FALSE(searching.lastTracked());
+    EXPECT_LT(cv::norm(seen->translation - translation), 0.01) << i;
+    EXPECT_LT(deg(angleBetween(seen->rotation, rotation)),
+              deg(angleBetween(searched->rotation, rotation)) + 0.5)
+        << i;
+  }
+}
+
+TEST_F(SignDetectorTest, SearchesAgainAfterTheSignDisappearsOrJumps) {
+  SignDetector detector(config());
+  const cv::Vec3d left(-0.3, 0.0, 1.5), right(0.35, 0.0, 1.5);
+  const cv::Matx33d face_on = cv::Matx33d::eye();
+  ASSERT_TRUE(detector.detect(renderSign(reference_, camera_, face_on, left, 2.0, 1), camera_));
+  ASSERT_TRUE(detector.detect(renderSign(reference_, camera_, face_on, left, 2.0, 2), camera_));
+  EXPECT_TRUE(detector.lastTracked());
+  // Gone: nothing, then found again by the search.
+  EXPECT_FALSE(detector.detect(cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(128)), camera_));
+  EXPECT_FALSE(detector.lastTracked());
+  auto seen = detector.detect(renderSign(reference_, camera_, face_on, left, 2.0, 3), camera_);
+  ASSERT_TRUE(seen);
+  EXPECT_FALSE(detector.lastTracked());
+  EXPECT_LT(cv::norm(seen->translation - left), 0.01);
+  // Jumped further than tracking reaches: found by the search, where it now is.
+  seen = detector.detect(renderSign(reference_, camera_, face_on, right, 2.0, 4), camera_);
+  ASSERT_TRUE(seen);
+  EXPECT_FALSE(detector.lastTracked());
+  EXPECT_LT(cv::norm(seen->translation - right), 0.01);
+  seen = detector.detect(renderSign(reference_, camera_, face_on, right, 2.0, 5), camera_);
+  ASSERT_TRUE(seen);
+  EXPECT_TRUE(detector.lastTracked());
+}
+
+TEST_F(SignDetectorTest, AFrameOfAnotherSizeStartsAfresh) {
+  SignDetector detector(config());
+  const cv::Vec3d ahead(0.0, 0.0, 1.5);
+  ASSERT_TRUE(detector.detect(renderSign(reference_, camera_, cv::Matx33d::eye(), ahead), camera_));
+  const cv::Mat larger =
+      renderSign(reference_, camera_, cv::Matx33d::eye(), ahead, 0.0, 1, cv::Size(800, 600));
+  ASSERT_TRUE(detector.detect(larger, camera_));
+  EXPECT_FALSE(detector.lastTracked());
+  ASSERT_TRUE(detector.detect(larger, camera_));
+  EXPECT_TRUE(detector.lastTracked());
+}
+
 TEST_F(SignDetectorTest, NothingInBlankOrNoiseImages) {
   SignDetector detector(config());
   EXPECT_FALSE(detector.detect(cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(128)), camera_));
@@ -228,6 +239,13 @@ TEST_F(SignDetectorTest, StartupErrors) {
   SignDetectorConfig few_inliers = config();
   few_inliers.min_inliers = 3;
   EXPECT_NE(expectThrow(few_inliers).find("min_inliers must be >= 4"), std::string::npos);
+  SignDetectorConfig unaligned_tracking = config();
+  unaligned_tracking.refine_passes = 0;
+  EXPECT_NE(expectThrow(unaligned_tracking).find("track needs refine_passes >= 1"),
+            std::string::npos);
+  SignDetectorConfig far_motion = config();
+  far_motion.max_track_motion_px = 0.0;
+  EXPECT_NE(expectThrow(far_motion).find("max_track_motion_px must be > 0"), std::string::npos);
 
   EXPECT_GE(SignDetector(config()).referenceFeatures(), config().min_reference_features);
 }

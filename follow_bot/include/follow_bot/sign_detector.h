@@ -4,6 +4,13 @@
 // reference under that homography (keypoints alone are good to ~0.3 px, too coarse for the tilt
 // and depth of a far sign), then the planar pose from the refined homography and the sign's
 // metric size (IPPE, both solutions, LM-refined).
+//
+// After a detection the sign is tracked instead of searched for: corners inside it in the last
+// frame are followed into the new frame (pyramidal Lucas-Kanade), a RANSAC homography through
+// them starts the same render-and-align passes, which must all succeed. Every pose is aligned to
+// the reference picture, never to the last frame, so tracking does not drift; when it fails
+// (too few corners, a mirrored or jumping outline, an alignment that fails) the frame falls back
+// to the SIFT search.
 #pragma once
 
 #include <optional>
@@ -34,6 +41,11 @@ struct SignDetectorConfig {
   // When the two planar-pose solutions' RMS errors differ by less than this (pixels), they cannot
   // be told apart reliably and the one nearest the previous frame's pose is kept.
   double ambiguity_px = 0.05;
+  bool track = true;                  // follow the sign between frames; false = search every frame
+  int track_features = 100;           // corners inside the sign followed into the next frame
+  int track_window_px = 21;           // side of the Lucas-Kanade window (odd)
+  int track_levels = 3;               // pyramid levels above full resolution
+  double max_track_motion_px = 80.0;  // a corner of the sign moving further: lost, search again
 };
 
 // Empty when the configuration is usable (the image itself is checked by the constructor),
@@ -47,15 +59,18 @@ class SignDetector : public MarkerDetector {
   explicit SignDetector(const SignDetectorConfig& config);
 
   // The sign in a mono8 image (id 0, quality = inlier count), or nothing. Remembers the pose it
-  // returns to settle the planar ambiguity of the next frame.
+  // returns to settle the planar ambiguity of the next frame, and the frame to track from; a
+  // frame of another size starts afresh.
   std::optional<MarkerObservation> detect(const cv::Mat& gray,
                                           const CameraGeometry& camera) override;
 
-  // Forget the previous pose (e.g. after the sign was lost for a while).
-  void reset() {
-    previous_rotation_.reset();
-    search_window_.reset();
-  }
+  // Forget the previous pose and sighting (e.g. after the sign was lost for a while): the next
+  // frame is searched whole.
+  void reset();
+
+  // Whether the last detect() followed the sign from the frame before (false: searched, or
+  // nothing found).
+  bool lastTracked() const { return last_tracked_; }
 
   int referenceFeatures() const { return static_cast<int>(reference_points_.size()); }
   double heightMetres() const { return height_m_; }
@@ -70,6 +85,18 @@ class SignDetector : public MarkerDetector {
   // RANSAC-filtered; nothing below min_inliers or for a mirrored fit.
   std::optional<Matches> matchIn(const cv::Mat& gray, const cv::Rect& window,
                                  bool half_resolution) const;
+  // Corners inside the sign in the last frame followed into `gray`, RANSAC-filtered; nothing
+  // below min_inliers, for a mirrored fit or when a sign corner moved beyond max_track_motion_px.
+  std::optional<Matches> trackInto(const cv::Mat& gray) const;
+  // RANSAC homography through plane-to-image correspondences, its inliers; nothing below
+  // min_inliers or when the sign would appear mirrored.
+  std::optional<Matches> fitHomography(const std::vector<cv::Point3f>& object,
+                                       const std::vector<cv::Point2f>& image) const;
+  // The pose from matches: the homography aligned (every one of refine_passes required when
+  // `require_alignment`), IPPE, the reprojection gate. On success remembers the pose, the
+  // aligned homography and where to search next.
+  std::optional<MarkerObservation> poseFrom(const cv::Mat& gray, const CameraGeometry& camera,
+                                            const Matches& matches, bool require_alignment);
   // The sign's corners TL, TR, BR, BL on its plane, metres.
   std::vector<cv::Point2d> outlinePlane() const;
   // One render-and-align pass on a sign-plane (metres) to image homography, in place; false (and
@@ -86,6 +113,10 @@ class SignDetector : public MarkerDetector {
   std::optional<cv::Matx33d> previous_rotation_;
   std::optional<cv::Rect> search_window_;  // where the sign was last seen, grown
   bool search_half_resolution_ = false;    // it was big there
+  cv::Mat last_frame_;                     // the last frame the sign was found in (tracking)
+  cv::Matx33d last_plane_to_image_;        // ... and its aligned homography there
+  cv::Size frame_size_;                    // size of the frames seen since the last reset
+  bool last_tracked_ = false;
 };
 
 }  // namespace follow_bot

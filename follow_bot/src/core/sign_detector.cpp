@@ -37,6 +37,14 @@ constexpr int kHalfResolutionSignPx = 150;
 // Extra pixels around the last sighting searched first in the next frame.
 constexpr int kSearchMarginPx = 64;
 
+// Corners followed between frames (Shi-Tomasi): minimum eigenvalue relative to the strongest,
+// and spacing, so they spread over the sign.
+constexpr double kTrackCornerQuality = 0.01;
+constexpr double kTrackCornerSpacingPx = 5.0;
+// Lucas-Kanade stops after this many iterations or a step below this many pixels.
+constexpr int kTrackIterations = 30;
+constexpr double kTrackEpsilonPx = 0.01;
+
 std::vector<cv::Point2f> keypointPositions(const std::vector<cv::KeyPoint>& keypoints) {
   std::vector<cv::Point2f> points;
   points.reserve(keypoints.size());
@@ -82,9 +90,15 @@ std::string validate(const SignDetectorConfig& config) {
            requireInRange("min_correlation", config.min_correlation, 0.0, 1.0),
            requirePositive("max_refine_shift_px", config.max_refine_shift_px),
            requireAtLeast("ambiguity_px", config.ambiguity_px, 0.0),
+           requireAtLeast("track_features", config.track_features, config.min_inliers),
+           requireAtLeast("track_window_px", config.track_window_px, 5),
+           requireAtLeast("track_levels", config.track_levels, 0),
+           requirePositive("max_track_motion_px", config.max_track_motion_px),
        }) {
     if (!error.empty()) return error;
   }
+  // Only the alignment to the reference vouches for a tracked homography.
+  if (config.track && config.refine_passes < 1) return "track needs refine_passes >= 1";
   return "";
 }
 
@@ -228,28 +242,32 @@ std::optional<SignDetector::Matches> SignDetector::matchIn(const cv::Mat& gray,
   }
   const cv::Point2f offset(static_cast<float>(window.x), static_cast<float>(window.y));
   std::vector<cv::Point3f> object_points;
-  std::vector<cv::Point2f> plane_points, image_points;
+  std::vector<cv::Point2f> image_points;
   for (const cv::DMatch& match : image_converter::ratioTestMatches(
            matcher_, descriptors, reference_descriptors_, config_.ratio)) {
-    const cv::Point3f& p = reference_points_[match.trainIdx];
-    object_points.push_back(p);
-    plane_points.emplace_back(p.x, p.y);
+    object_points.push_back(reference_points_[match.trainIdx]);
     image_points.push_back(window_positions[match.queryIdx] + offset);
   }
-  if (static_cast<int>(image_points.size()) < config_.min_inliers) return std::nullopt;
+  return fitHomography(object_points, image_points);
+}
 
+std::optional<SignDetector::Matches> SignDetector::fitHomography(
+    const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image) const {
+  if (static_cast<int>(image.size()) < config_.min_inliers) return std::nullopt;
+  std::vector<cv::Point2f> plane_points;
+  plane_points.reserve(object.size());
+  for (const cv::Point3f& p : object) plane_points.emplace_back(p.x, p.y);
   // Homography from the sign plane (metres) to pixels; the threshold is in image pixels.
   std::vector<unsigned char> inlier_mask;
-  const cv::Mat homography =
-      cv::findHomography(plane_points, image_points, cv::RANSAC, config_.ransac_threshold_px,
-                         inlier_mask, 2000, 0.999);
+  const cv::Mat homography = cv::findHomography(
+      plane_points, image, cv::RANSAC, config_.ransac_threshold_px, inlier_mask, 2000, 0.999);
   if (homography.empty()) return std::nullopt;
   Matches matches;
   matches.plane_to_image = cv::Matx33d(homography.ptr<double>());
   for (size_t i = 0; i < inlier_mask.size(); ++i) {
     if (!inlier_mask[i]) continue;
-    matches.object.push_back(object_points[i]);
-    matches.image.push_back(image_points[i]);
+    matches.object.push_back(object[i]);
+    matches.image.push_back(image[i]);
   }
   if (static_cast<int>(matches.image.size()) < config_.min_inliers) return std::nullopt;
 
@@ -261,32 +279,131 @@ std::optional<SignDetector::Matches> SignDetector::matchIn(const cv::Mat& gray,
   return matches;
 }
 
+std::optional<SignDetector::Matches> SignDetector::trackInto(const cv::Mat& gray) const {
+  std::vector<cv::Point2d> before;
+  cv::perspectiveTransform(outlinePlane(), before, last_plane_to_image_);
+  const std::vector<cv::Point2f> outline(before.begin(), before.end());
+  const cv::Rect whole(0, 0, gray.cols, gray.rows);
+  const cv::Rect sign = cv::boundingRect(outline) & whole;
+  if (sign.empty()) return std::nullopt;
+  // Corners in the last frame well inside the sign: along its outline the camera sees it
+  // blended with a background that moves differently.
+  std::vector<cv::Point> polygon;
+  for (const cv::Point2f& p : outline) {
+    polygon.emplace_back(cvRound((p.x - sign.x) * 16), cvRound((p.y - sign.y) * 16));
+  }
+  cv::Mat mask = cv::Mat::zeros(sign.size(), CV_8UC1);
+  cv::fillConvexPoly(mask, polygon, cv::Scalar(255), cv::LINE_8, 4);
+  const cv::Size band(2 * kEdgeBandPx + 1, 2 * kEdgeBandPx + 1);
+  cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, band));
+  std::vector<cv::Point2f> corners;
+  cv::goodFeaturesToTrack(last_frame_(sign), corners, config_.track_features, kTrackCornerQuality,
+                          kTrackCornerSpacingPx, mask);
+  if (static_cast<int>(corners.size()) < config_.min_inliers) return std::nullopt;
+
+  // Followed within the reach of the fastest allowed motion (plus the window) around the sign.
+  const int reach =
+      static_cast<int>(std::ceil(config_.max_track_motion_px)) + config_.track_window_px;
+  const cv::Rect region =
+      cv::Rect(sign.x - reach, sign.y - reach, sign.width + 2 * reach, sign.height + 2 * reach) &
+      whole;
+  const cv::Point2f shift(static_cast<float>(sign.x - region.x),
+                          static_cast<float>(sign.y - region.y));
+  for (cv::Point2f& p : corners) p += shift;
+  std::vector<cv::Point2f> followed;
+  std::vector<unsigned char> status;
+  std::vector<float> errors;
+  cv::calcOpticalFlowPyrLK(last_frame_(region), gray(region), corners, followed, status, errors,
+                           cv::Size(config_.track_window_px, config_.track_window_px),
+                           config_.track_levels,
+                           cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
+                                            kTrackIterations, kTrackEpsilonPx));
+  const cv::Point2f offset(static_cast<float>(region.x), static_cast<float>(region.y));
+  std::vector<cv::Point2f> from, to;
+  for (size_t i = 0; i < corners.size(); ++i) {
+    if (!status[i] || !(cv::norm(followed[i] - corners[i]) <= config_.max_track_motion_px)) {
+      continue;
+    }
+    from.push_back(corners[i] + offset);
+    to.push_back(followed[i] + offset);
+  }
+  if (static_cast<int>(from.size()) < config_.min_inliers) return std::nullopt;
+  // Where the corners lie on the sign, by the last frame's aligned homography.
+  std::vector<cv::Point2f> on_plane;
+  cv::perspectiveTransform(from, on_plane, cv::Mat(last_plane_to_image_.inv()));
+  std::vector<cv::Point3f> object;
+  object.reserve(on_plane.size());
+  for (const cv::Point2f& p : on_plane) object.emplace_back(p.x, p.y, 0.0f);
+  std::optional<Matches> matches = fitHomography(object, to);
+  if (!matches) return std::nullopt;
+  std::vector<cv::Point2d> after;
+  cv::perspectiveTransform(outlinePlane(), after, matches->plane_to_image);
+  for (size_t i = 0; i < after.size(); ++i) {
+    if (!(cv::norm(after[i] - before[i]) <= config_.max_track_motion_px)) return std::nullopt;
+  }
+  return matches;
+}
+
 std::vector<cv::Point2d> SignDetector::outlinePlane() const {
   const double half_w = config_.width_m / 2.0;
   const double half_h = height_m_ / 2.0;
   return {{-half_w, -half_h}, {half_w, -half_h}, {half_w, half_h}, {-half_w, half_h}};
 }
 
+void SignDetector::reset() {
+  previous_rotation_.reset();
+  search_window_.reset();
+  last_frame_.release();
+  last_tracked_ = false;
+}
+
 std::optional<MarkerObservation> SignDetector::detect(const cv::Mat& gray,
                                                       const CameraGeometry& camera) {
+  last_tracked_ = false;
   if (gray.empty() || gray.type() != CV_8UC1) return std::nullopt;
-  const cv::Rect whole(0, 0, gray.cols, gray.rows);
-  // Search near the last sighting first: SIFT over the whole frame is most of the cost.
-  std::optional<Matches> matches;
-  if (search_window_) matches = matchIn(gray, *search_window_ & whole, search_half_resolution_);
-  if (!matches && search_window_ != whole) matches = matchIn(gray, whole, false);
-  search_window_.reset();
-  if (!matches) return std::nullopt;
-  const std::vector<cv::Point3f>& inlier_object = matches->object;
-  const std::vector<cv::Point2f>& inlier_image = matches->image;
+  if (gray.size() != frame_size_) {  // another camera or resolution: nothing carries over
+    reset();
+    frame_size_ = gray.size();
+  }
+  std::optional<MarkerObservation> seen;
+  if (!last_frame_.empty()) {
+    if (const std::optional<Matches> tracked = trackInto(gray)) {
+      seen = poseFrom(gray, camera, *tracked, /*require_alignment=*/true);
+      last_tracked_ = seen.has_value();
+    }
+  }
+  if (!seen) {
+    const cv::Rect whole(0, 0, gray.cols, gray.rows);
+    // Search near the last sighting first: SIFT over the whole frame is most of the cost.
+    std::optional<Matches> matches;
+    if (search_window_) matches = matchIn(gray, *search_window_ & whole, search_half_resolution_);
+    if (!matches && search_window_ != whole) matches = matchIn(gray, whole, false);
+    search_window_.reset();
+    if (matches) seen = poseFrom(gray, camera, *matches, /*require_alignment=*/false);
+  }
+  if (seen && config_.track) {
+    gray.copyTo(last_frame_);
+  } else {
+    last_frame_.release();
+  }
+  return seen;
+}
+
+std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
+                                                        const CameraGeometry& camera,
+                                                        const Matches& matches,
+                                                        bool require_alignment) {
+  const std::vector<cv::Point3f>& inlier_object = matches.object;
+  const std::vector<cv::Point2f>& inlier_image = matches.image;
 
   // Pose points: a grid over the sign mapped by the ECC-refined homography, or else the inlier
   // keypoints themselves. A second pass renders from the first pass's better homography.
-  cv::Matx33d plane_to_image = matches->plane_to_image;
+  cv::Matx33d plane_to_image = matches.plane_to_image;
   std::vector<cv::Point3f> pose_object = inlier_object;
   std::vector<cv::Point2f> pose_image = inlier_image;
   int passes = 0;
   while (passes < config_.refine_passes && refineHomography(gray, plane_to_image)) ++passes;
+  if (require_alignment && passes < config_.refine_passes) return std::nullopt;
   if (passes > 0) {
     pose_object.clear();
     std::vector<cv::Point2f> grid;
@@ -344,6 +461,7 @@ std::optional<MarkerObservation> SignDetector::detect(const cv::Mat& gray,
   for (size_t i = 0; i < 4; ++i) observation.corners[i] = corners[i];
   observation.quality = static_cast<double>(inlier_image.size());
   previous_rotation_ = observation.rotation;
+  last_plane_to_image_ = plane_to_image;
   // Next search window: the sign's box grown by half its size and kSearchMarginPx each way,
   // enough for a turn at the robot's top rate between two frames. A big sign has plenty of
   // keypoints at half resolution (the alignment restores the accuracy) for a quarter of the cost.
