@@ -118,13 +118,17 @@ def test_metrics_report_dropout_stop_delay_and_reply_counts():
     assert values["replies"] == {"frames": 20, "extra": 0, "missing": 0}
     assert "cross_track" in values and "lap" in values
     # The runner's own criteria come first, the file's replies.extra takes their place.
+    # margin: the fraction of the bound's size still free (0.7 - 0.2 of 0.7 for max_abs_v).
     assert check(scenario, values) == [
-        {"metric": "commands.non_finite", "value": 0, "rule": "== 0", "passed": True},
-        {"metric": "commands.max_abs_v", "value": 0.2, "rule": "<= 0.7", "passed": True},
-        {"metric": "commands.max_abs_w", "value": 0.0, "rule": "<= 3.14159", "passed": True},
-        {"metric": "replies.missing", "value": 0, "rule": "== 0", "passed": True},
-        {"metric": "replies.extra", "value": 0, "rule": "== 0", "passed": True},
-    ]
+        {"metric": "commands.non_finite", "value": 0, "rule": "== 0", "passed": True,
+         "margin": 1.0},
+        {"metric": "commands.max_abs_v", "value": 0.2, "rule": "<= 0.7", "passed": True,
+         "margin": pytest.approx(5 / 7)},
+        {"metric": "commands.max_abs_w", "value": 0.0, "rule": "<= 3.14159", "passed": True,
+         "margin": 1.0},
+        {"metric": "replies.missing", "value": 0, "rule": "== 0", "passed": True, "margin": 1.0},
+        {"metric": "replies.extra", "value": 0, "rule": "== 0", "passed": True, "margin": 1.0},
+    ]  # fmt: skip
 
 
 def test_line_gaps_leave_the_scored_centreline_whole():

@@ -1,13 +1,23 @@
 """What a set of scenario runs adds up to: DIR/summary.json (every run's name, seed, verdict and
-metrics; overall counts and the success rate with its 95 % Wilson interval) and DIR/report.md."""
+metrics; overall counts and the success rate with its 95 % Wilson interval; each metric's
+quantiles; the worst runs) and DIR/report.md with PNGs under DIR/plots (each judged metric's
+histogram and CDF with its bounds, and for a sweep each drawn value against pass/fail)."""
 
 from __future__ import annotations
 
 import json
 import math
+import shlex
 from pathlib import Path
 
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
 Z_95 = 1.959963984540054  # standard normal quantile for a two-sided 95 % interval
+QUANTILES = (0.0, 0.05, 0.25, 0.5, 0.75, 0.95, 1.0)
+QUANTILE_NAMES = tuple(f"q{round(100 * q):02d}" for q in QUANTILES)  # q00 = min, q100 = max
+WORST_RUNS = 10  # how many of the worst runs the report lists
 
 
 def wilson_interval(successes: int, runs: int, z: float = Z_95) -> tuple[float, float]:
@@ -39,14 +49,66 @@ def format_value(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
+def flatten(values, prefix: str = "") -> dict[str, float]:
+    """Every finite number in nested metrics by dotted path (list items by index); no booleans."""
+    if isinstance(values, dict):
+        items = values.items()
+    elif isinstance(values, list):
+        items = enumerate(values)
+    else:
+        ok = isinstance(values, int | float) and not isinstance(values, bool)
+        return {prefix: float(values)} if ok and math.isfinite(values) else {}
+    out: dict[str, float] = {}
+    for key, value in items:
+        out.update(flatten(value, f"{prefix}.{key}" if prefix else str(key)))
+    return out
+
+
+def distributions(runs: list[dict]) -> dict[str, dict]:
+    """Each metric's count, mean and quantiles (QUANTILES) over the runs that have it."""
+    columns: dict[str, list[float]] = {}
+    for run in runs:
+        for path, value in flatten(run.get("metrics") or {}).items():
+            columns.setdefault(path, []).append(value)
+    out = {}
+    for path, values in sorted(columns.items()):
+        quantiles = np.quantile(values, QUANTILES)
+        out[path] = {
+            "count": len(values),
+            "mean": float(np.mean(values)),
+            **{name: float(v) for name, v in zip(QUANTILE_NAMES, quantiles, strict=True)},
+        }
+    return out
+
+
+def tightest(run: dict) -> dict | None:
+    """The run's criterion row with the least margin (a missing value counts as the least)."""
+    rows = run.get("criteria", [])
+    return min(rows, key=lambda c: -math.inf if c["margin"] is None else c["margin"], default=None)
+
+
+def worst(runs: list[dict], count: int = WORST_RUNS) -> list[dict]:
+    """The `count` worst runs: those that could not run, then failures, then the smallest
+    margin to any criterion's bound."""
+
+    def badness(run: dict) -> tuple:
+        row = tightest(run)
+        margin = math.inf if row is None else row["margin"]
+        return ("error" not in run, run["passed"], -math.inf if margin is None else margin)
+
+    return sorted(runs, key=badness)[:count]
+
+
 def summarise(results: list[dict]) -> dict:
     runs = [
         {
             "name": r["scenario"],
             "seed": r.get("seed"),
+            "source": r.get("source"),
+            "parameters": r.get("parameters") or {},
             "passed": r["passed"],
             **({"error": r["error"]} if "error" in r else {}),
-            "failed_criteria": [c for c in r.get("criteria", []) if not c["passed"]],
+            "criteria": r.get("criteria", []),
             "metrics": r.get("metrics"),
         }
         for r in results
@@ -63,10 +125,21 @@ def summarise(results: list[dict]) -> dict:
             "success_rate": passed / len(runs) if runs else 0.0,
             "success_interval_95": list(wilson_interval(passed, len(runs))),
         },
+        "distributions": distributions(runs),
+        "worst": [run["name"] for run in worst(runs)],
     }
 
 
-def markdown(summary: dict) -> str:
+def _criterion_text(row: dict) -> str:
+    return f"{row['metric']} = {format_value(row['value'])} ({row['rule']})"
+
+
+def replay_command(run: dict) -> str:
+    source = shlex.quote(run["source"] or "SCENARIO.yaml")
+    return f"rosrun harness run_scenario {source} --select {shlex.quote(run['name'])}"
+
+
+def markdown(summary: dict, plots: dict[str, str]) -> str:
     overall = summary["overall"]
     low, high = overall["success_interval_95"]
     lines = [
@@ -87,19 +160,131 @@ def markdown(summary: dict) -> str:
             numbers = ", ".join(
                 f"{k}={format_value(v)}" for k, v in headline(run["metrics"]).items()
             )
-        failed = "; ".join(
-            f"{c['metric']} = {format_value(c['value'])} ({c['rule']})"
-            for c in run["failed_criteria"]
-        )
+        failed = "; ".join(_criterion_text(c) for c in run["criteria"] if not c["passed"])
         seed = "" if run["seed"] is None else run["seed"]
         link = f"[{run['name']}]({run['name']}/run.png)"
         lines.append(f"| {link} | {seed} | {verdict} | {numbers} | {failed} |")
+
+    by_name = {run["name"]: run for run in summary["runs"]}
+    lines += [
+        "",
+        "## Worst runs",
+        "",
+        "Those that could not run, then failures, then the least margin to a criterion's bound "
+        "(the fraction of the bound's size still free). Replay one by name with the command.",
+        "",
+        "| run | seed | verdict | tightest criterion | margin | drawn values | replay |",
+        "| --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for name in summary["worst"]:
+        run = by_name[name]
+        row = tightest(run)
+        verdict = "ERROR" if "error" in run else "pass" if run["passed"] else "**FAIL**"
+        criterion = run.get("error", "") if row is None else _criterion_text(row)
+        margin = "" if row is None else format_value(row["margin"])
+        drawn = ", ".join(f"{k}={format_value(v)}" for k, v in run["parameters"].items())
+        seed = "" if run["seed"] is None else run["seed"]
+        lines.append(
+            f"| {name} | {seed} | {verdict} | {criterion} | {margin} | {drawn} | "
+            f"`{replay_command(run)}` |"
+        )
+
+    lines += [
+        "",
+        "## Metric distributions",
+        "",
+        "Over the runs that have the metric; q00 is the minimum, q50 the median, q100 the "
+        "maximum." + (" Judged metrics link their histogram and CDF." if plots else ""),
+        "",
+        "| metric | runs | mean | " + " | ".join(QUANTILE_NAMES) + " |",
+        "| --- | --- | --- |" + " --- |" * len(QUANTILE_NAMES),
+    ]
+    for metric, d in summary["distributions"].items():
+        label = f"[{metric}]({plots[metric]})" if metric in plots else metric
+        numbers = " | ".join(format_value(d[q]) for q in QUANTILE_NAMES)
+        lines.append(f"| {label} | {d['count']} | {format_value(d['mean'])} | {numbers} |")
+    if "parameters" in plots:
+        lines += ["", "## Drawn values", "", f"![drawn values]({plots['parameters']})"]
     return "\n".join(lines) + "\n"
+
+
+def _save(figure: Figure, path: Path) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    FigureCanvasAgg(figure).print_png(str(path))
+
+
+def plot_metric(path: Path, metric: str, values: list[float], bounds: list[float]) -> None:
+    """Histogram and empirical CDF of one metric over the runs, its bounds as red lines."""
+    figure = Figure(figsize=(9, 3.2), layout="constrained")
+    histogram, cdf = figure.subplots(1, 2)
+    histogram.hist(values, bins=min(30, max(5, len(values) // 4)), color="tab:blue")
+    histogram.set_ylabel("runs")
+    ordered = np.sort(values)
+    cdf.step(ordered, np.arange(1, len(ordered) + 1) / len(ordered), where="post")
+    cdf.set_ylabel("fraction of runs <= value")
+    for ax in (histogram, cdf):
+        ax.set_xlabel(metric)
+        for bound in bounds:
+            ax.axvline(bound, color="tab:red", linestyle="--")
+    figure.suptitle(f"{metric} over {len(values)} runs")
+    _save(figure, path)
+
+
+def plot_parameters(path: Path, runs: list[dict]) -> None:
+    """For each drawn number, its histogram split into passed and failed runs."""
+    names = sorted({k for r in runs for k, v in r["parameters"].items() if _is_number(v)})
+    figure = Figure(figsize=(4 * len(names), 3.2), layout="constrained")
+    for ax, name in zip(np.atleast_1d(figure.subplots(1, len(names))), names, strict=True):
+        drawn = [r for r in runs if name in r["parameters"]]
+        passed = [r["parameters"][name] for r in drawn if r["passed"]]
+        failed = [r["parameters"][name] for r in drawn if not r["passed"]]
+        ax.hist([passed, failed], bins=12, stacked=True, color=["tab:green", "tab:red"],
+                label=["passed", "failed"])  # fmt: skip
+        ax.set_xlabel(name)
+        ax.set_ylabel("runs")
+    ax.legend()
+    _save(figure, path)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def write_plots(out: Path, summary: dict) -> dict[str, str]:
+    """PNGs under out/plots: each judged metric with a value in two or more runs, and the drawn
+    values when runs were drawn. Returns their paths relative to `out`, by metric."""
+    runs = summary["runs"]
+    if len(runs) < 2:
+        return {}
+    bounds: dict[str, set[float]] = {}
+    for run in runs:
+        for row in run["criteria"]:
+            rule_bounds = bounds.setdefault(row["metric"], set())
+            rule_bounds.update(float(b) for b in row["rule"].split() if _is_float(b))
+    plots = {}
+    for metric, metric_bounds in sorted(bounds.items()):
+        values = [flatten(run["metrics"] or {}).get(metric) for run in runs if "error" not in run]
+        values = [v for v in values if v is not None]
+        if len(values) >= 2 and len(set(values)) > 1:
+            plots[metric] = f"plots/{metric}.png"
+            plot_metric(out / plots[metric], metric, values, sorted(metric_bounds))
+    if any(any(_is_number(v) for v in run["parameters"].values()) for run in runs):
+        plots["parameters"] = "plots/parameters.png"
+        plot_parameters(out / plots["parameters"], runs)
+    return plots
+
+
+def _is_float(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def write_summary(out: Path, results: list[dict]) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     summary = summarise(results)
     (out / "summary.json").write_text(json.dumps(summary, indent=2, default=float))
-    (out / "report.md").write_text(markdown(summary))
+    (out / "report.md").write_text(markdown(summary, write_plots(out, summary)))
     return summary

@@ -165,6 +165,8 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
     rows = check(scenario, values)
     result = {
         "scenario": scenario.name,
+        "seed": scenario.seed,
+        "parameters": scenario.parameters,
         "source": str(scenario.source),
         "world": world.name,
         "passed": all(r["passed"] for r in rows),
@@ -186,7 +188,14 @@ def play(scenario: Scenario, out: Path, video: bool) -> dict:
     try:
         return run_one(scenario, out / scenario.name, video)
     except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
-        return {"scenario": scenario.name, "passed": False, "error": str(error)}
+        return {
+            "scenario": scenario.name,
+            "seed": scenario.seed,
+            "parameters": scenario.parameters,
+            "source": str(scenario.source),
+            "passed": False,
+            "error": str(error),
+        }
 
 
 def describe(result: dict) -> list[str]:

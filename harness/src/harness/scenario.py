@@ -3,9 +3,11 @@
 A scenario names a world, the behaviour to launch (or a built-in scripted driver), a duration
 and stop condition, perturbations and pass criteria over the metrics of `metrics()`. A family
 file holds many: a `base` run and a `matrix` whose cartesian product of field values (or a list
-of such products) gives one named run each. Every run also gets the runner's own criteria (no
-non-finite command, none beyond the world robot's limits, one reply per frame in lockstep).
-Schema in worlds/SCHEMA.md. Everything is validated on load; errors name the field.
+of such products) gives one named run each, or a `sweep` that draws N runs from distributions
+over the same fields (harness.sweep), each with a seed of its own. Every run also gets the
+runner's own criteria (no non-finite command, none beyond the world robot's limits, one reply
+per frame in lockstep). Schema in worlds/SCHEMA.md. Everything is validated on load; errors
+name the field.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from __future__ import annotations
 import copy
 import itertools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -22,10 +24,12 @@ import yaml
 
 from harness import scoring
 from harness.simulation import Perturbations
+from harness.sweep import draw, member_name, parse_sweep
 from harness.validation import (
     Fields,
     ValidationError,
     boolean,
+    integer,
     mapping,
     number,
     sequence,
@@ -73,6 +77,25 @@ class Criterion:
         ok &= self.maximum is None or value <= self.maximum
         return value, bool(ok)
 
+    def margin(self, value: Any) -> float | None:
+        """How far inside its bounds `value` is, as a fraction of their scale (half the range
+        between min and max, or the one bound's size): 1 = far in, 0 = on a bound, < 0 outside;
+        an `equals` rule gives 1 or -1; None when there is no finite value to bound."""
+        if self.equals is not None:
+            return 1.0 if value == self.equals else -1.0
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return None
+        if not math.isfinite(value):
+            return None
+        if self.minimum is not None and self.maximum is not None:
+            scale = (self.maximum - self.minimum) / 2.0
+        else:
+            bound = self.minimum if self.maximum is None else self.maximum
+            scale = abs(bound) or 1.0
+        room = [value - self.minimum] if self.minimum is not None else []
+        room += [self.maximum - value] if self.maximum is not None else []
+        return min(room) / scale
+
     def describe(self) -> str:
         if self.equals is not None:
             return f"== {self.equals!r}"
@@ -102,8 +125,10 @@ class Scenario:
     goal: str | None  # marker name to park in front of
     standoff: float
     criteria: tuple[Criterion, ...]
+    seed: int | None = None  # seeds the pixel noise (None: the world's noise seed)
     source: Path | None = None
     spec: dict = field(default_factory=dict, compare=False)  # the run's own fields, as parsed
+    parameters: dict = field(default_factory=dict, compare=False)  # a sweep member's draws
 
 
 def _world_file(value: Any, where: str, base: Path) -> Path:
@@ -223,7 +248,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
     allowed = {
         "name", "world", "start", "behaviour", "driver", "rate_hz", "duration", "stop_when",
         "lockstep", "reply_timeout", "perturbations", "target", "watch", "goal", "standoff",
-        "criteria",
+        "criteria", "seed",
     }  # fmt: skip
     try:
         f = Fields(data, "", allowed)
@@ -241,6 +266,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
         criteria.update((c.metric, c) for c in f.get("criteria", _parse_criteria, ()))
         name = f.get("name", string, source.stem if source else "scenario")
         duration = f.get("duration", number(gt=0.0))
+        seed = f.get("seed", integer(ge=0), None)
         for c in criteria.values():
             # still_since = still from then to the end: a bound at the end says only that the
             # last command was zero, so it must fall strictly before the end.
@@ -261,12 +287,15 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             stop_when=stop_when,
             lockstep=lockstep,
             reply_timeout=f.get("reply_timeout", number(gt=0.0), 2.0),
-            perturbations=f.section("perturbations", _parse_perturbations),
+            perturbations=replace(
+                f.section("perturbations", _parse_perturbations), noise_seed=seed
+            ),
             target=f.get("target", string, None),
             watch=f.get("watch", string, None),
             goal=f.get("goal", string, None),
             standoff=f.get("standoff", number(gt=0.0), 0.5),
             criteria=tuple(criteria.values()),
+            seed=seed,
             source=source,
             spec={**data, "name": name, "world": str(world_path)},
         )
@@ -301,13 +330,60 @@ def _axis(path: str, values: Any, labels: dict, where: str) -> list[tuple[str, A
         raise ScenarioError(f"labels.{path}: {fmt!r} does not fit the values: {error}") from None
 
 
-def expand(data: Any, family: str) -> list[dict]:
-    """A file's runs as plain scenario mappings, each with its generated `name`
-    `<family>/<label>_<label>…`. A file without `matrix` is one run as written."""
-    if not (isinstance(data, dict) and "matrix" in data):
-        return [data]
-    f = Fields(data, "", {"base", "matrix", "labels"})
+def set_field(run: dict, path: str, value: Any, where: str) -> dict:
+    """`run` with the field at dotted `path` set to `value`; the path `variant` lays a mapping of
+    fields over the run instead (mappings merge key by key)."""
+    if path == "variant":
+        return merged(run, mapping(value, f"{where}.variant"))
+    *parents, leaf = path.split(".")
+    node = run
+    for key in parents:
+        node = node.setdefault(key, {})
+        if not isinstance(node, dict):
+            raise ScenarioError(f"{where}.{path}: {key!r} is not a mapping in the base")
+    node[leaf] = copy.deepcopy(value)
+    return run
+
+
+def _sweep(base: dict, section: Any, family: str) -> list[tuple[dict, dict]]:
+    """A sweep's members: the base with each varied field drawn, its own `seed` and name."""
+    sweep = parse_sweep(section)
+    runs = []
+    for index in range(sweep.runs):
+        seed, values = draw(sweep, index)
+        run = copy.deepcopy(base)
+        for path, value in values.items():
+            run = set_field(run, path, value, "sweep.vary")
+        runs.append(({**run, "name": member_name(family, index, seed), "seed": seed}, values))
+    return runs
+
+
+def _read_yaml(p: Path) -> Any:
+    try:
+        return yaml.safe_load(p.read_text(encoding="utf-8"))
+    except OSError as error:
+        raise ScenarioError(f"{p}: cannot read scenario file: {error.strerror}") from None
+    except yaml.YAMLError as error:
+        raise ScenarioError(f"{p}: not valid YAML: {error}") from None
+
+
+def expand(data: Any, family: str, base_dir: Path = Path(".")) -> list[tuple[dict, dict]]:
+    """A file's runs as plain scenario mappings, each with the values its sweep drew (empty for
+    matrix runs). Matrix runs are named `<family>/<label>_<label>…`, sweep members
+    `<family>/<index>_seed<seed>`. `extends: FILE` (relative to `base_dir`) starts from that
+    family file's `base`. A file without `matrix` or `sweep` is one run as written."""
+    if not (isinstance(data, dict) and ("matrix" in data or "sweep" in data)):
+        return [(data, {})]
+    f = Fields(data, "", {"base", "matrix", "labels", "sweep", "extends"})
     base = f.get("base", mapping, {})
+    if f.has("extends"):
+        parent = _read_yaml(base_dir / f.get("extends", string))
+        inherited = parent.get("base", {}) if isinstance(parent, dict) else {}
+        base = merged(mapping(inherited, f"extends: {data['extends']}: base"), base)
+    if "sweep" in data:
+        if "matrix" in data or "labels" in data:
+            raise ScenarioError("sweep: a file holds a matrix or a sweep, not both")
+        return _sweep(base, data["sweep"], family)
     labels = f.get("labels", mapping, {})
     blocks = f.data["matrix"]
     blocks = [blocks] if isinstance(blocks, dict) else sequence(blocks, "matrix", min_len=1)
@@ -319,35 +395,26 @@ def expand(data: Any, family: str) -> list[dict]:
         for combination in itertools.product(*(values for _, values in axes)):
             run = copy.deepcopy(base)
             for (path, _), (_, value) in zip(axes, combination, strict=True):
-                if path == "variant":  # a named set of fields laid over the base
-                    run = merged(run, mapping(value, f"{where}.variant"))
-                    continue
-                *parents, leaf = str(path).split(".")
-                node = run
-                for key in parents:
-                    node = node.setdefault(key, {})
-                node[leaf] = copy.deepcopy(value)
+                run = set_field(run, str(path), value, where)
             name = f"{family}/" + "_".join(label for label, _ in combination)
             if name in runs:
                 raise ScenarioError(f"{where}: two runs are named {name!r}")
             runs[name] = {**run, "name": name}
-    return list(runs.values())
+    return [(run, {}) for run in runs.values()]
 
 
 def load_scenarios(path: Path | str) -> list[Scenario]:
     """Every run a scenario file holds (one for a plain file, the matrix's for a family)."""
     p = Path(path)
+    data = _read_yaml(p)
     try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise ScenarioError(f"{p}: cannot read scenario file: {error.strerror}") from None
-    except yaml.YAMLError as error:
-        raise ScenarioError(f"{p}: not valid YAML: {error}") from None
-    try:
-        runs = expand(data, p.stem)
+        runs = expand(data, p.stem, p.parent)
     except ValidationError as error:
         raise ScenarioError(f"{p}: {error}") from None
-    return [parse_scenario(run, p.parent, p.resolve()) for run in runs]
+    return [
+        replace(parse_scenario(run, p.parent, p.resolve()), parameters=parameters)
+        for run, parameters in runs
+    ]
 
 
 def load_scenario(path: Path | str) -> Scenario:
@@ -489,6 +556,12 @@ def check(scenario: Scenario, values: dict) -> list[dict]:
     for criterion in scenario.criteria:
         value, ok = criterion.check(values)
         rows.append(
-            {"metric": criterion.metric, "value": value, "rule": criterion.describe(), "passed": ok}
+            {
+                "metric": criterion.metric,
+                "value": value,
+                "rule": criterion.describe(),
+                "passed": ok,
+                "margin": criterion.margin(value),
+            }
         )
     return rows

@@ -24,6 +24,7 @@ class Perturbations:
 
     gain: float | None = None  # lighting gain; None keeps the world's
     noise_sigma: float | None = None  # grey levels; None keeps the world's
+    noise_seed: int | None = None  # the pixel noise's RNG seed; None keeps the world's
     delay_steps: int | None = None  # actuation delay in steps; None keeps the world's
     dropouts: tuple[tuple[float, float], ...] = ()  # [start, end) sim times without frames
     # Unpainted stretches of floor line 0: (arc length from its first point, length), metres.
@@ -122,7 +123,7 @@ class Simulation:
         self.perturbations = perturbations or Perturbations()
         p = self.perturbations
         painted = with_line_gaps(world, p.line_gaps)
-        self.renderer = Renderer(painted, gain=p.gain, noise_sigma=p.noise_sigma)
+        self.renderer = Renderer(painted, gain=p.gain, noise_sigma=p.noise_sigma, seed=p.noise_seed)
         delay = world.robot.delay_steps if p.delay_steps is None else p.delay_steps
         self.robot = Robot(
             start or world.robot.start,
