@@ -1,8 +1,11 @@
-"""`rosrun harness run_scenario SCENARIO.yaml [...] [--jobs N] [--out DIR] [--video]`
+"""`rosrun harness run_scenario SCENARIO.yaml [...] [--jobs N | --scheduler tcp://HOST:PORT]
+[--out DIR] [--video]`
 
 Plays each scenario in a ROS graph of its own: its own roscore on a free port, its own ROS_HOME
 and log folder, the behaviour's launch file (or the scripted constant-Twist driver), then the
-simulator in lockstep; with --jobs N, N scenarios at a time. Afterwards it scores each recorded
+simulator in lockstep; with --jobs N, N scenarios at a time on this machine; with --scheduler,
+each run is a task on that Dask cluster (played the same way on a worker, in a temporary
+folder sent back and unpacked under DIR). Afterwards it scores each recorded
 run and writes DIR/<scenario>/result.json (all metrics and each criterion), run.png (floor map
 with the driven path) and, with --video, camera.mp4; DIR/summary.json and DIR/report.md add up
 all runs (success rate with its 95 % Wilson interval). Exits 1 when a criterion fails, 2 when a
@@ -188,14 +191,19 @@ def play(scenario: Scenario, out: Path, video: bool) -> dict:
     try:
         return run_one(scenario, out / scenario.name, video)
     except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
-        return {
-            "scenario": scenario.name,
-            "seed": scenario.seed,
-            "parameters": scenario.parameters,
-            "source": str(scenario.source),
-            "passed": False,
-            "error": str(error),
-        }
+        return error_entry(scenario, str(error))
+
+
+def error_entry(scenario: Scenario, message: str) -> dict:
+    """The result of a run that could not be played."""
+    return {
+        "scenario": scenario.name,
+        "seed": scenario.seed,
+        "parameters": scenario.parameters,
+        "source": str(scenario.source),
+        "passed": False,
+        "error": message,
+    }
 
 
 def describe(result: dict) -> list[str]:
@@ -243,6 +251,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--jobs", type=int, default=1, help="scenarios run at once, each in its own ROS graph"
     )
+    parser.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="run each scenario as a task on this Dask scheduler's workers instead (each worker "
+        "needs this workspace built and sourced; --jobs does not apply)",
+    )
     args = parser.parse_args(argv)
     if args.jobs < 1:
         parser.error(f"--jobs must be at least 1, got {args.jobs}")
@@ -259,7 +273,16 @@ def main(argv: list[str] | None = None) -> int:
         if not scenarios:
             print(f"run_scenario: no run matches {' or '.join(args.select)}", file=sys.stderr)
             return 2
-    results = run_all(scenarios, args.out, args.video, args.jobs)
+    if args.scheduler:
+        from harness.cluster import run_on_cluster  # Dask only when asked for
+
+        try:
+            results = run_on_cluster(scenarios, args.out, args.scheduler, args.video)
+        except OSError as error:  # no scheduler at that address (distributed's timeouts too)
+            print(f"run_scenario: scheduler {args.scheduler}: {error}", file=sys.stderr)
+            return 2
+    else:
+        results = run_all(scenarios, args.out, args.video, args.jobs)
     summary = write_summary(args.out, results)
     width = max(len(r["scenario"]) for r in results)
     print("\nsummary")
