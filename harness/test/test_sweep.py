@@ -168,6 +168,7 @@ def test_report_quantiles_worst_runs_and_plots(tmp_path):
     assert summary["overall"] == {
         "runs": 5, "passed": 3, "failed": 1, "errors": 1, "success_rate": 0.6,
         "success_interval_95": list(wilson_interval(3, 5)),
+        "failures_by_criterion": {"parking.lateral": {"runs": 1, "only": 1}},
     }  # fmt: skip
     lateral = distributions(summary["runs"])["parking.lateral"]
     assert lateral["count"] == 4 and lateral["mean"] == pytest.approx(0.00175)
@@ -187,6 +188,7 @@ def test_report_quantiles_worst_runs_and_plots(tmp_path):
     ]  # fmt: skip
     text = markdown(summary, {"parking.lateral": "plots/parking.lateral.png"})
     assert "3 of 5 passed (1 failed, 1 could not run): success rate 0.600" in text
+    assert "| parking.lateral | 1 | 1 |" in text
     assert "rosrun harness run_scenario /w/fam.yaml --select fam/002_seed3" in text
     assert "| [parking.lateral](plots/parking.lateral.png) | 4 | 0.00175 | -0.002 |" in text
 

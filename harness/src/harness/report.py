@@ -99,6 +99,19 @@ def worst(runs: list[dict], count: int = WORST_RUNS) -> list[dict]:
     return sorted(runs, key=badness)[:count]
 
 
+def failures_by_criterion(runs: list[dict]) -> dict[str, dict]:
+    """For each criterion some run failed: how many runs failed it, and how many failed only it
+    (what the success rate would gain if that one held)."""
+    out: dict[str, dict] = {}
+    for run in runs:
+        failed = [c["metric"] for c in run["criteria"] if not c["passed"]]
+        for metric in failed:
+            counts = out.setdefault(metric, {"runs": 0, "only": 0})
+            counts["runs"] += 1
+            counts["only"] += len(failed) == 1
+    return dict(sorted(out.items(), key=lambda item: -item[1]["runs"]))
+
+
 def summarise(results: list[dict]) -> dict:
     runs = [
         {
@@ -124,6 +137,7 @@ def summarise(results: list[dict]) -> dict:
             "errors": errors,
             "success_rate": passed / len(runs) if runs else 0.0,
             "success_interval_95": list(wilson_interval(passed, len(runs))),
+            "failures_by_criterion": failures_by_criterion(runs),
         },
         "distributions": distributions(runs),
         "worst": [run["name"] for run in worst(runs)],
@@ -164,6 +178,12 @@ def markdown(summary: dict, plots: dict[str, str]) -> str:
         seed = "" if run["seed"] is None else run["seed"]
         link = f"[{run['name']}]({run['name']}/run.png)"
         lines.append(f"| {link} | {seed} | {verdict} | {numbers} | {failed} |")
+
+    if overall["failures_by_criterion"]:
+        lines += ["", "## Failures by criterion", "", "| criterion | runs failing it | "
+                  "failing only it |", "| --- | --- | --- |"]  # fmt: skip
+        for metric, counts in overall["failures_by_criterion"].items():
+            lines.append(f"| {metric} | {counts['runs']} | {counts['only']} |")
 
     by_name = {run["name"]: run for run in summary["runs"]}
     lines += [

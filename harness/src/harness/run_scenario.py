@@ -237,7 +237,7 @@ def run_all(scenarios: list[Scenario], out: Path, video: bool = False, jobs: int
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument(
-        "scenarios", nargs="+", type=Path, help="scenario YAML files (plain or family matrices)"
+        "scenarios", nargs="+", type=Path, help="scenario YAML files (plain, matrices or sweeps)"
     )
     parser.add_argument(
         "--select",
