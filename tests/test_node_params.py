@@ -151,12 +151,12 @@ def master_env():
         (
             "image_converter image_converter",
             "_circle_radius:=0",
-            "~circle_radius must be > 0, got 0",
+            "~circle_radius must be in [1, 16384], got 0",
         ),
         (
             "image_converter image_converter",
             "_circle_radius:=2.5",
-            "~circle_radius must be an integer > 0, got the number 2.5",
+            "~circle_radius must be an integer in [1, 16384], got the number 2.5",
         ),
         (
             "image_converter image_converter",
@@ -165,8 +165,8 @@ def master_env():
         ),
         (
             "image_converter panorama",
-            "_turn_rate:=abc",
-            "~turn_rate must be a finite number, got the string 'abc'",
+            "_max_angular:=abc",
+            "~max_angular must be a finite number in [0.01, 10], got the string 'abc'",
         ),
         (
             "image_converter panorama",
@@ -176,8 +176,27 @@ def master_env():
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
         ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),
         ("image_converter panorama", "_detector:=surf", "~detector must be orb or sift"),
-        ("image_converter panorama", "_step_angle_deg:=0", "step_angle must be"),
-        ("image_converter panorama", "_limit_angular:=0", "~limit_angular_accel: max_angular"),
+        (
+            "image_converter panorama",
+            "_step_angle_deg:=0",
+            "~step_angle_deg must be in [0.5, 359], got 0",
+        ),
+        (
+            "image_converter panorama",
+            "_step_angle_deg:=200",
+            "~step_angle_deg must be at most ~total_angle_deg, got 200 and 120",
+        ),
+        (
+            "image_converter panorama",
+            "_min_angular:=1",
+            "~min_angular must be at most ~max_angular, got 1 and 0.5",
+        ),
+        (
+            "image_converter panorama",
+            "_yaw_tolerance_deg:=10",
+            "~yaw_tolerance_deg must be below ~step_angle_deg / 2, got 10 and 20",
+        ),
+        ("image_converter panorama", "_limit_angular:=0", "~limit_angular must be > 0, got 0"),
     ],
 )
 def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, request):
