@@ -119,8 +119,9 @@ struct BeaconControllerConfig {
   // Follow mode. Colour names refer to the detector's ColourSpec names.
   std::string follow_colour = "green";
   std::string stop_colour = "red";
-  // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre.
-  double close_area = 30000.0;   // px^2: hold once the follow blob is at least this big
+  // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre, ~85000 px^2 0.47 m from its
+  // surface (what the scenarios run with; cfg/BeaconChaser.cfg's default).
+  double close_area = 85000.0;   // px^2: hold once the follow blob is at least this big
   double stop_min_area = 500.0;  // px^2: a stop blob at least this big stops the robot
   // The robot stays stopped this long after the stop colour was last seen, so one frame that
   // misses it does not let the robot lurch forward.
