@@ -15,7 +15,7 @@ export ROS_HOME := $(BUILD)/ros_home
 export FOLLOW_BOT_VENV := $(VENV)
 ROSENV := source $(DEVEL)/setup.bash &&
 
-.PHONY: deps nodes build demo test test-full lint format bench fuzz clean
+.PHONY: deps nodes build demo test test-full lint format docs bench fuzz clean
 
 deps:
 	tools/install_deps.sh
@@ -44,6 +44,10 @@ lint: deps
 
 format: deps
 	tools/lint.sh --fix
+
+# Rewrites the README parameter tables from the .cfg files (tests/test_param_tables.py checks them).
+docs:
+	/usr/bin/python3 tools/param_tables.py --write
 
 # test: every suite, with one nominal run of each scenario family plus every fault run;
 # test-full: every run of every scenario family's matrix too.

@@ -18,7 +18,7 @@ import pytest
 from harness.fuzz import camera_info_msg, image_msg, odom_msg, probe_frame
 from harness.run_scenario import free_port, stop, wait_for_port
 
-FRAME_TIMEOUT_S = 1.0  # the node's ~frame_timeout default (README)
+FRAME_TIMEOUT_S = 1.0  # the node's ~frame_timeout default (image_converter/README.md)
 
 
 def client() -> None:

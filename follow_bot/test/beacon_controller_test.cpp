@@ -590,7 +590,7 @@ TEST(Approach, SearchesDrivesSlowsAndArrives) {
 
   twist = controller.update(look(detector, config.camera, Pose(), dumpsterAt(4.0)), 0.1);
   EXPECT_EQ(controller.state(), BeaconState::kApproaching);
-  EXPECT_DOUBLE_EQ(twist.linear, config.max_speed);
+  EXPECT_DOUBLE_EQ(twist.linear, config.max_linear);
   EXPECT_NEAR(twist.angular, 0.0, 1e-3);
   ASSERT_TRUE(controller.lastRange());
   EXPECT_NEAR(*controller.lastRange(), 4.0, groundRangeTolerance(config.camera, 4.0));
@@ -601,7 +601,7 @@ TEST(Approach, SearchesDrivesSlowsAndArrives) {
   // The object off to the right: turn right, and drive slower the further off it is.
   twist = controller.update(look(detector, config.camera, Pose(), dumpsterAt(3.0, -1.0)), 0.3);
   EXPECT_LT(twist.angular, 0.0);
-  EXPECT_LT(twist.linear, config.max_speed);
+  EXPECT_LT(twist.linear, config.max_linear);
   ASSERT_TRUE(controller.lastBearing());
   EXPECT_GT(*controller.lastBearing(), 0.0) << "right of the axis is a positive bearing";
 

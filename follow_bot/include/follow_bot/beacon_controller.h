@@ -119,8 +119,9 @@ struct BeaconControllerConfig {
   // Follow mode. Colour names refer to the detector's ColourSpec names.
   std::string follow_colour = "green";
   std::string stop_colour = "red";
-  // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre.
-  double close_area = 30000.0;   // px^2: hold once the follow blob is at least this big
+  // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre, ~85000 px^2 0.47 m from its
+  // surface (what the scenarios run with; cfg/BeaconChaser.cfg's default).
+  double close_area = 85000.0;   // px^2: hold once the follow blob is at least this big
   double stop_min_area = 500.0;  // px^2: a stop blob at least this big stops the robot
   // The robot stays stopped this long after the stop colour was last seen, so one frame that
   // misses it does not let the robot lurch forward.
@@ -141,10 +142,10 @@ struct BeaconControllerConfig {
     return level;
   }();
   double stop_distance = 1.0;  // m, target range (see RangeEstimate) to stop at
-  // linear = k_range * (range - stop_distance), clamped to [0, max_speed] (to
-  // [-max_speed, max_speed] with allow_reverse): a first-order approach, no overshoot.
-  double k_range = 0.8;    // 1/s
-  double max_speed = 0.3;  // m/s
+  // linear = k_range * (range - stop_distance), clamped to [0, max_linear] (to
+  // [-max_linear, max_linear] with allow_reverse): a first-order approach, no overshoot.
+  double k_range = 0.8;     // 1/s
+  double max_linear = 0.3;  // m/s
   bool allow_reverse = false;
   // The linear speed is scaled by max(0, 1 - |bearing| / speed_taper_bearing), so a robot
   // facing away turns toward the object before driving and arrives along a straight line: a
@@ -152,7 +153,7 @@ struct BeaconControllerConfig {
   // frame no longer shows its centre.
   double speed_taper_bearing = 0.2;  // rad
   double k_bearing = 2.0;            // angular = -k_bearing * bearing, rad/s per rad
-  double max_turn_rate = 1.0;        // rad/s, bound on that angular
+  double max_angular = 1.0;          // rad/s, bound on that angular
   // Arrived when |range - stop_distance| and |bearing| are below these. The robot closes in
   // from one side and stops on the first frame inside, so it ends near the tolerance: half of
   // the 1 cm goal leaves room for the range's pixel quantisation (6 mm per row at 1 m).

@@ -179,10 +179,10 @@ std::string validate(const BeaconControllerConfig& c) {
            prefixed("camera.", validate(c.camera)),
            requirePositive("stop_distance", c.stop_distance),
            requirePositive("k_range", c.k_range),
-           requirePositive("max_speed", c.max_speed),
+           requirePositive("max_linear", c.max_linear),
            requirePositive("speed_taper_bearing", c.speed_taper_bearing),
            requireAtLeast("k_bearing", c.k_bearing, 0.0),
-           requirePositive("max_turn_rate", c.max_turn_rate),
+           requirePositive("max_angular", c.max_angular),
            requirePositive("distance_tolerance", c.distance_tolerance),
            requirePositive("bearing_tolerance", c.bearing_tolerance),
            requireAtLeast("lost_hold", c.lost_hold, 0.0),
@@ -288,13 +288,13 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
   state_ = BeaconState::kApproaching;
   Twist2D command;
   if (range) {
-    const double min_speed = config_.allow_reverse ? -config_.max_speed : 0.0;
+    const double min_speed = config_.allow_reverse ? -config_.max_linear : 0.0;
     const double taper = std::max(0.0, 1.0 - std::abs(bearing) / config_.speed_taper_bearing);
     command.linear = taper * std::clamp(config_.k_range * (*range - config_.stop_distance),
-                                        min_speed, config_.max_speed);
+                                        min_speed, config_.max_linear);
   }
   command.angular =
-      std::clamp(-config_.k_bearing * bearing, -config_.max_turn_rate, config_.max_turn_rate);
+      std::clamp(-config_.k_bearing * bearing, -config_.max_angular, config_.max_angular);
   return command;
 }
 

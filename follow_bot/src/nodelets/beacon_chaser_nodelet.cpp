@@ -84,10 +84,10 @@ Settings coreSettings(const BeaconChaserConfig& cfg, const BeaconControllerConfi
   controller.approach_speed = cfg.approach_speed;
   controller.turn_gain = cfg.turn_gain;
   controller.stop_distance = cfg.stop_distance;
-  controller.max_speed = cfg.max_speed;
+  controller.max_linear = cfg.max_linear;
   controller.k_range = cfg.k_range;
   controller.k_bearing = cfg.k_bearing;
-  controller.max_turn_rate = cfg.max_turn_rate;
+  controller.max_angular = cfg.max_angular;
   controller.search_rate = cfg.search_rate;
   for (const std::string& error :
        {validate(controller), checkColoursDetected(controller, detector)}) {

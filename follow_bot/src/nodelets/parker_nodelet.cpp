@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@
 #include <opencv2/imgproc.hpp>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "follow_bot/ParkerConfig.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot/parking_servo.h"
 #include "follow_bot/ros/camera_input.h"
@@ -41,25 +43,32 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
-// ~target and its detector's ~params; throws std::invalid_argument.
-std::unique_ptr<MarkerDetector> makeDetector(const ros::NodeHandle& pnh, std::string& target) {
-  target = param<std::string>(pnh, "target", "apriltag");
-  if (target == "apriltag") {
+// The core's message names its field ("family must be ..."); the user typed ~tag_family.
+std::string tagError(const std::string& error) { return "~tag_" + error; }
+
+// The marker detector `cfg.target` names; throws std::invalid_argument naming the ~param.
+std::unique_ptr<MarkerDetector> makeDetector(const ParkerConfig& cfg) {
+  if (cfg.target == "apriltag") {
     TagDetectorConfig config;
-    config.family = param(pnh, "tag_family", config.family);
-    config.id = param(pnh, "tag_id", config.id);
-    config.size_m = positiveParam(pnh, "tag_size", config.size_m);
-    config.quad_decimate = param(pnh, "quad_decimate", config.quad_decimate);
-    config.min_decision_margin = param(pnh, "min_decision_margin", config.min_decision_margin);
-    config.max_hamming = param(pnh, "max_hamming", config.max_hamming);
-    const std::string error = validate(config);
-    if (!error.empty()) throw std::invalid_argument("~tag parameters: " + error);
-    return std::make_unique<TagDetector>(config);
+    config.family = cfg.tag_family;
+    config.id = cfg.tag_id;
+    config.size_m = cfg.tag_size;
+    config.quad_decimate = cfg.quad_decimate;
+    config.min_decision_margin = cfg.min_decision_margin;
+    config.max_hamming = cfg.max_hamming;
+    if (const std::string error = validate(config); !error.empty()) {
+      throw std::invalid_argument(tagError(error));
+    }
+    try {
+      return std::make_unique<TagDetector>(config);  // throws on an id the family lacks
+    } catch (const std::invalid_argument& error) {
+      throw std::invalid_argument(tagError(error.what()));
+    }
   }
-  if (target == "sign") {
+  if (cfg.target == "sign") {
     SignDetectorConfig config;
-    config.image_path = param<std::string>(pnh, "sign_image", "");
-    config.width_m = positiveParam(pnh, "sign_width", 0.40);
+    config.image_path = cfg.sign_image;
+    config.width_m = cfg.sign_width;
     if (config.image_path.empty()) {
       throw std::invalid_argument("~sign_image must name the sign's reference image file");
     }
@@ -69,28 +78,36 @@ std::unique_ptr<MarkerDetector> makeDetector(const ros::NodeHandle& pnh, std::st
       throw std::invalid_argument(std::string("~sign_image: ") + error.what());
     }
   }
-  throw std::invalid_argument("~target must be 'apriltag' or 'sign', got '" + target + "'");
+  throw std::invalid_argument("~target must be 'apriltag' or 'sign', got '" + cfg.target + "'");
 }
 
-ParkingServoConfig readServoConfig(const ros::NodeHandle& pnh) {
+// Ranges are the .cfg's (readConfig checked them); the one rule linking two ~params is here.
+ParkingServoConfig servoConfig(const ParkerConfig& cfg, const CameraGeometry& camera) {
   ParkingServoConfig config;
-  config.standoff_m = positiveParam(pnh, "standoff", config.standoff_m);
-  config.gain = param(pnh, "gain", config.gain);
-  config.steer_gain = param(pnh, "steer_gain", config.steer_gain);
-  config.max_bearing_rad = param(pnh, "max_bearing_deg", 20.0) * kDegToRad;
-  config.backoff_m = param(pnh, "backoff", config.backoff_m);
-  config.max_linear = param(pnh, "max_speed", config.max_linear);
-  config.max_angular = param(pnh, "max_turn_rate", config.max_angular);
-  config.search_rate = param(pnh, "search_rate", config.search_rate);
-  config.lost_timeout = param(pnh, "lost_timeout", config.lost_timeout);
-  config.position_tolerance = param(pnh, "position_tolerance", config.position_tolerance);
-  config.lateral_tolerance = param(pnh, "lateral_tolerance", config.lateral_tolerance);
-  config.heading_tolerance_rad = param(pnh, "heading_tolerance_deg", 0.5) * kDegToRad;
-  CameraGeometry level = config.camera;  // ~camera_pitch_deg defaults to 0
-  level.pitch_rad = 0.0;
-  config.camera = readCameraMounting(pnh, level);
-  const std::string error = validate(config);
-  if (!error.empty()) throw std::invalid_argument("~servo parameters: " + error);
+  config.standoff_m = cfg.standoff;
+  config.gain = cfg.gain;
+  config.steer_gain = cfg.steer_gain;
+  config.max_bearing_rad = cfg.max_bearing_deg * kDegToRad;
+  config.backoff_m = cfg.backoff;
+  config.max_linear = cfg.max_linear;
+  config.max_angular = cfg.max_angular;
+  config.search_rate = cfg.search_rate;
+  config.lost_timeout = cfg.lost_timeout;
+  config.position_tolerance = cfg.position_tolerance;
+  config.lateral_tolerance = cfg.lateral_tolerance;
+  config.heading_tolerance_rad = cfg.heading_tolerance_deg * kDegToRad;
+  config.camera = camera;
+  if (config.standoff_m - camera.x_offset_m <= 0.05) {
+    std::ostringstream error;
+    error << "~standoff must exceed ~camera_x_offset + 0.05 m (the marker > 5 cm in front of the "
+             "camera), got "
+          << config.standoff_m << " with ~camera_x_offset " << camera.x_offset_m;
+    throw std::invalid_argument(error.str());
+  }
+  // Anything else validate() rejects is outside the .cfg's ranges: a bug, not a user error.
+  if (const std::string error = validate(config); !error.empty()) {
+    throw std::logic_error("parking servo: " + error);
+  }
   return config;
 }
 
@@ -101,12 +118,15 @@ class ParkerNodelet : public image_converter::CheckedNodelet {
   void init() override {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
-    detector_ = makeDetector(pnh, target_);  // throws on bad ~params
-    const ParkingServoConfig servo_config = readServoConfig(pnh);
-    camera_ = servo_config.camera;
+    const ParkerConfig cfg = readConfig<ParkerConfig>(pnh);  // throws on bad ~params
+    detector_ = makeDetector(cfg);
+    CameraGeometry level;  // ~camera_pitch_deg defaults to 0
+    level.pitch_rad = 0.0;
+    camera_ = readCameraMounting(pnh, level);
+    const ParkingServoConfig servo_config = servoConfig(cfg, camera_);
     servo_ = std::make_unique<ParkingServo>(servo_config);
-    publish_tf_ = param(pnh, "publish_tf", false);
-    marker_frame_ = param<std::string>(pnh, "marker_frame", "parking_marker");
+    publish_tf_ = cfg.publish_tf;
+    marker_frame_ = cfg.marker_frame;
     output_ = std::make_unique<CommandOutput>(nh, pnh, /*allow_reverse=*/true);
 
     pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("target_pose", 1);
@@ -117,7 +137,7 @@ class ParkerNodelet : public image_converter::CheckedNodelet {
     camera_info_sub_ = nh.subscribe("camera_info", 1, &ParkerNodelet::onCameraInfo, this);
     image_transport::ImageTransport transport(nh);
     image_sub_ = transport.subscribe("image", 1, &ParkerNodelet::onImage, this);
-    NODELET_INFO("parking in front of the %s at %.2f m", target_.c_str(), servo_config.standoff_m);
+    NODELET_INFO("parking in front of the %s at %.2f m", cfg.target.c_str(), cfg.standoff);
   }
 
   // Every callback runs guarded: an exception drops the message, never the node.
@@ -231,7 +251,6 @@ class ParkerNodelet : public image_converter::CheckedNodelet {
   }
 
   std::mutex mutex_;
-  std::string target_;
   std::unique_ptr<MarkerDetector> detector_;
   std::unique_ptr<ParkingServo> servo_;
   CameraGeometry camera_;

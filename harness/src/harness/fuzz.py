@@ -35,7 +35,7 @@ REPO = Path(__file__).resolve().parents[3]
 SIGN_IMAGE = REPO / "worlds" / "textures" / "parking_sign.png"
 SIGN_WIDTH_M = 0.40
 TAG_SIZE_M = 0.30
-# The shared limits' defaults (README: ~limit_linear, ~limit_angular).
+# The shared limits' defaults (follow_bot/README.md: ~limit_linear, ~limit_angular).
 LIMIT_LINEAR = 0.7
 LIMIT_ANGULAR = math.pi
 # The harness camera: 640x480, 60 deg horizontal field of view.

@@ -15,6 +15,7 @@
 #include <opencv2/highgui.hpp>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "image_converter/ImageConverterConfig.h"
 #include "image_converter/image_converter_nodelet.h"
 #include "image_converter/overlay.h"
 #include "image_converter/ros/frame_msg.h"
@@ -35,12 +36,11 @@ void ImageConverterNodelet::init() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
 
-  const auto positive = [](int value) { return value > 0; };
-  overlay_.radius_px = checkedParam(pnh, "circle_radius", overlay_.radius_px, positive, "> 0");
-  overlay_.thickness_px =
-      checkedParam(pnh, "circle_thickness", overlay_.thickness_px, positive, "> 0");
-  display_ = param(pnh, "display", false);
-  transport_ = param<std::string>(pnh, "image_transport", "raw");
+  const ImageConverterConfig cfg = readConfig<ImageConverterConfig>(pnh);  // throws on bad ~params
+  overlay_.radius_px = cfg.circle_radius;
+  overlay_.thickness_px = cfg.circle_thickness;
+  display_ = cfg.display;
+  transport_ = cfg.image_transport;
   if (display_ && !displayAvailable()) {
     NODELET_WARN(
         "~display is true but no X display is available (DISPLAY is unset); "

@@ -13,6 +13,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -28,6 +29,7 @@
 #include <std_srvs/Trigger.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "image_converter/PanoramaConfig.h"
 #include "image_converter/panorama_capture.h"
 #include "image_converter/panorama_nodelet.h"
 #include "image_converter/ros/checked_nodelet.h"
@@ -44,8 +46,12 @@ constexpr double kPi = 3.141592653589793;
 
 enum class StitchMethod { kAuto, kFeatures, kRotation };
 
-void throwIfError(const std::string& what, const std::string& error) {
-  if (!error.empty()) throw std::invalid_argument(what + ": " + error);
+// "<rule>, got <a> and <b>" unless `ok`: a rule linking two ~params, for a start-up error.
+void requireLinked(bool ok, const std::string& rule, double a, double b) {
+  if (ok) return;
+  std::ostringstream error;
+  error << rule << ", got " << a << " and " << b;
+  throw std::invalid_argument(error.str());
 }
 
 double yawOf(const nav_msgs::Odometry& odom) {
@@ -87,53 +93,55 @@ class PanoramaNodelet : public CheckedNodelet {
     spinner_->start();
   }
 
+  // Ranges are the .cfg's (readConfig checks them); the rules linking two ~params are here.
   void readParams(const ros::NodeHandle& pnh) {
+    const PanoramaConfig cfg = readConfig<PanoramaConfig>(pnh);
+    requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,
+                  "~step_angle_deg must be at most ~total_angle_deg", cfg.step_angle_deg,
+                  cfg.total_angle_deg);
+    requireLinked(cfg.min_angular <= cfg.max_angular, "~min_angular must be at most ~max_angular",
+                  cfg.min_angular, cfg.max_angular);
+    requireLinked(cfg.yaw_tolerance_deg < cfg.step_angle_deg / 2.0,
+                  "~yaw_tolerance_deg must be below ~step_angle_deg / 2", cfg.yaw_tolerance_deg,
+                  cfg.step_angle_deg);
     PanoramaCaptureConfig capture;
-    capture.total_angle = param(pnh, "total_angle_deg", 120.0) * kPi / 180.0;
-    capture.step_angle = param(pnh, "step_angle_deg", 20.0) * kPi / 180.0;
-    capture.max_turn_rate = param(pnh, "turn_rate", capture.max_turn_rate);
-    capture.min_turn_rate = param(pnh, "min_turn_rate", capture.min_turn_rate);
-    capture.yaw_gain = param(pnh, "yaw_gain", capture.yaw_gain);
-    capture.yaw_tolerance = param(pnh, "yaw_tolerance_deg", 0.5) * kPi / 180.0;
-    capture.settle_frames = param(pnh, "settle_frames", capture.settle_frames);
-    capture.return_to_start = param(pnh, "return_to_start", capture.return_to_start);
-    throwIfError("capture parameters", validate(capture));
-    capture_ = std::make_unique<PanoramaCapture>(capture);
+    capture.total_angle = cfg.total_angle_deg * kPi / 180.0;
+    capture.step_angle = cfg.step_angle_deg * kPi / 180.0;
+    capture.max_turn_rate = cfg.max_angular;
+    capture.min_turn_rate = cfg.min_angular;
+    capture.yaw_gain = cfg.yaw_gain;
+    capture.yaw_tolerance = cfg.yaw_tolerance_deg * kPi / 180.0;
+    capture.settle_frames = cfg.settle_frames;
+    capture.return_to_start = cfg.return_to_start;
+    capture_ = std::make_unique<PanoramaCapture>(capture);  // validated above and by the ranges
 
-    const std::string detector = param<std::string>(pnh, "detector", "orb");
-    if (!parseDetector(detector, match_options_.detector)) {
-      throw std::invalid_argument("~detector must be orb or sift, got '" + detector + "'");
+    if (!parseDetector(cfg.detector, match_options_.detector)) {
+      throw std::invalid_argument("~detector must be orb or sift, got '" + cfg.detector + "'");
     }
-    match_options_.min_inliers = param(pnh, "min_inliers", match_options_.min_inliers);
-    throwIfError("matching parameters", validate(match_options_));
+    match_options_.min_inliers = cfg.min_inliers;
 
-    const std::string method = param<std::string>(pnh, "stitch_method", "auto");
-    if (method == "auto") {
+    if (cfg.stitch_method == "auto") {
       method_ = StitchMethod::kAuto;
-    } else if (method == "features") {
+    } else if (cfg.stitch_method == "features") {
       method_ = StitchMethod::kFeatures;
-    } else if (method == "rotation") {
+    } else if (cfg.stitch_method == "rotation") {
       method_ = StitchMethod::kRotation;
     } else {
       throw std::invalid_argument("~stitch_method must be auto, features or rotation, got '" +
-                                  method + "'");
+                                  cfg.stitch_method + "'");
     }
+    frame_timeout_ = cfg.frame_timeout;
+    capture_timeout_ = cfg.capture_timeout;
+
     camera_.pitch = param(pnh, "camera_pitch_deg", 0.0) * kPi / 180.0;
     if (!(std::abs(camera_.pitch) < 1.5)) {
       throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
     }
 
     VelocityLimiterConfig limits;
-    limits.max_angular = param(pnh, "limit_angular", limits.max_angular);
-    limits.max_angular_accel = param(pnh, "limit_angular_accel", limits.max_angular_accel);
-    throwIfError("~limit_angular, ~limit_angular_accel", validate(limits));
+    limits.max_angular = positiveParam(pnh, "limit_angular", limits.max_angular);
+    limits.max_angular_accel = positiveParam(pnh, "limit_angular_accel", limits.max_angular_accel);
     limiter_ = std::make_unique<VelocityLimiter>(limits);
-
-    frame_timeout_ = param(pnh, "frame_timeout", 1.0);
-    capture_timeout_ = param(pnh, "capture_timeout", 120.0);
-    if (!(frame_timeout_ > 0.0) || !(capture_timeout_ > 0.0)) {
-      throw std::invalid_argument("~frame_timeout and ~capture_timeout must be > 0 s");
-    }
   }
 
   // Every callback runs guarded: an exception drops the message, never the node.
