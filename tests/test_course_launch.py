@@ -1,15 +1,18 @@
-"""`roslaunch follow_bot course.launch` as a person runs it: real time by default, and Ctrl-C
-leaves the robot with a zero Twist as the last command on /cmd_vel."""
+"""`roslaunch follow_bot course.launch` as a person runs it, in real time (the default) and in
+lockstep: Ctrl-C leaves the robot with a zero Twist as the last command on /cmd_vel."""
 
 import os
 import signal
 import subprocess
 import time
 
+import pytest
+
 from harness.run_scenario import free_port, stop, wait_for_port
 
 
-def test_ctrl_c_ends_with_a_zero_twist():
+@pytest.mark.parametrize("lockstep", ["false", "true"])
+def test_ctrl_c_ends_with_a_zero_twist(lockstep):
     port = free_port()
     env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_IP="127.0.0.1")
     roscore = subprocess.Popen(
@@ -23,7 +26,7 @@ def test_ctrl_c_ends_with_a_zero_twist():
             env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
         )  # fmt: skip
         launch = subprocess.Popen(
-            ["roslaunch", "follow_bot", "course.launch"],
+            ["roslaunch", "follow_bot", "course.launch", f"lockstep:={lockstep}"],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         )  # fmt: skip
         # Drive until the follower commands a real speed (well past start-up).

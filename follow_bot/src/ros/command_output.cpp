@@ -7,12 +7,20 @@
 
 #include "follow_bot/ros/params.h"
 #include "image_converter/ros/frame_msg.h"
+#include "image_converter/ros/publish_last.h"
 
 namespace follow_bot {
 
 using image_converter::guardedCallback;
 
 namespace {
+geometry_msgs::Twist twistMsg(const Twist2D& command) {
+  geometry_msgs::Twist msg;
+  msg.linear.x = command.linear;
+  msg.angular.z = command.angular;
+  return msg;
+}
+
 VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse) {
   VelocityLimiterConfig config;
   config.allow_reverse = allow_reverse;
@@ -47,7 +55,7 @@ CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool all
 CommandOutput::~CommandOutput() {
   timer_.stop();
   wall_timer_.stop();
-  stop();
+  image_converter::publishLast(publisher_, twistMsg(limiter_.stop()));
 }
 
 void CommandOutput::frameArrived() {
@@ -111,12 +119,7 @@ void CommandOutput::stop() {
   publish(limiter_.stop());
 }
 
-void CommandOutput::publish(const Twist2D& command) {
-  geometry_msgs::Twist msg;
-  msg.linear.x = command.linear;
-  msg.angular.z = command.angular;
-  publisher_.publish(msg);
-}
+void CommandOutput::publish(const Twist2D& command) { publisher_.publish(twistMsg(command)); }
 
 void CommandOutput::checkWatchdog(const ros::TimerEvent&) {
   guardedCallback("watchdog", [this] { checkWatchdogNow(); });

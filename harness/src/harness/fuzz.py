@@ -30,9 +30,9 @@ import numpy as np
 
 from harness.apriltag_image import tag_image
 from harness.run_scenario import free_port, stop, wait_for_port
+from harness.world import WORLDS_DIR
 
-REPO = Path(__file__).resolve().parents[3]
-SIGN_IMAGE = REPO / "worlds" / "textures" / "parking_sign.png"
+SIGN_IMAGE = WORLDS_DIR / "textures" / "parking_sign.png"
 SIGN_WIDTH_M = 0.40
 TAG_SIZE_M = 0.30
 # The shared limits' defaults (follow_bot/README.md: ~limit_linear, ~limit_angular).

@@ -48,6 +48,8 @@ MASTER_START_TIMEOUT = 20.0  # wall s
 MASTER_START_ATTEMPTS = 3  # a port another program takes between our probe and roscore's bind
 # Wall-clock allowance on top of the scenario's sim duration (start-up, slow machines).
 RUN_TIMEOUT_FLOOR = 120.0
+# A single run's progress in a log (stderr not a terminal): a line per this share of its duration.
+PROGRESS_LOG_STEP = 0.1
 
 _ports_lock = threading.Lock()
 _ports_handed_out: set[int] = set()
@@ -113,9 +115,37 @@ def behaviour_command(scenario: Scenario) -> list[str]:
     ]
 
 
-def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
+def show_progress(scenario: Scenario, env: dict, processes: list[subprocess.Popen]) -> None:
+    """A progress line over the run's sim time (sim_clock reads /clock each wall second) until
+    the reader stops: a bar on a terminal, a line every PROGRESS_LOG_STEP of the duration in a log.
+    """
+    reader = subprocess.Popen(
+        [sys.executable, "-m", "harness.sim_clock"],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    processes.append(reader)  # stopped with the run's other processes
+
+    def follow() -> None:
+        tty = sys.stderr.isatty()
+        with tqdm(
+            total=scenario.duration, desc=scenario.name, file=sys.stderr, leave=False,
+            disable=not tty, bar_format="{desc}: {n:.1f}/{total:.0f} sim s {percentage:3.0f}% {bar}"
+        ) as bar:  # fmt: skip
+            logged = 0.0
+            for line in reader.stdout:
+                sim_time = float(line)
+                bar.update(sim_time - bar.n)
+                if not tty and sim_time >= logged + PROGRESS_LOG_STEP * scenario.duration:
+                    logged = sim_time
+                    tqdm.write(f"{scenario.name}: {sim_time:.1f} of {scenario.duration:.0f} sim s",
+                               file=sys.stderr)  # fmt: skip
+
+    threading.Thread(target=follow, daemon=True).start()
+
+
+def run_one(scenario: Scenario, out: Path, video: bool, progress: bool = False) -> dict:
     """Runs one scenario end to end in a ROS graph of its own; returns the result written to
-    result.json."""
+    result.json. `progress`: show the run's sim time on stderr while it plays."""
     out.mkdir(parents=True, exist_ok=True)
     world = load_world(scenario.world_path)
     ros_home = out / "ros_home"
@@ -155,6 +185,8 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
             if video:
                 sim_command.append(f"_video:={out / 'camera.mp4'}")
             sim = start(sim_command)
+            if progress:
+                show_progress(scenario, env, processes)
             sim.wait(timeout=RUN_TIMEOUT_FLOOR + 20.0 * scenario.duration)
         finally:
             for process in reversed(processes):
@@ -186,10 +218,10 @@ def run_one(scenario: Scenario, out: Path, video: bool) -> dict:
     return result
 
 
-def play(scenario: Scenario, out: Path, video: bool) -> dict:
+def play(scenario: Scenario, out: Path, video: bool, progress: bool = False) -> dict:
     """run_one's result, or an error entry when the scenario could not be run."""
     try:
-        return run_one(scenario, out / scenario.name, video)
+        return run_one(scenario, out / scenario.name, video, progress)
     except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
         return error_entry(scenario, str(error))
 
@@ -226,7 +258,8 @@ def run_all(scenarios: list[Scenario], out: Path, video: bool = False, jobs: int
         ThreadPoolExecutor(max_workers=jobs) as pool,
         tqdm(total=len(scenarios), unit="run", file=sys.stderr) as progress,
     ):
-        futures = {pool.submit(play, s, out, video): i for i, s in enumerate(scenarios)}
+        # One run at a time: its sim time too.
+        futures = {pool.submit(play, s, out, video, jobs == 1): i for i, s in enumerate(scenarios)}
         for future in as_completed(futures):
             result = results[futures[future]] = future.result()
             progress.write("\n".join(describe(result)))

@@ -7,13 +7,13 @@ field path in the message, instead of as a numpy or OpenCV error deep inside ren
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import cv2
 import numpy as np
+import rospkg
 import yaml
 
 from harness.camera import Camera
@@ -34,9 +34,17 @@ from harness.validation import (
     vector,
 )
 
-# The shipped worlds; FOLLOW_BOT_WORLDS points elsewhere (e.g. an installed share folder).
-_REPO_WORLDS = Path(__file__).resolve().parents[3] / "worlds"
-WORLDS_DIR = Path(os.environ.get("FOLLOW_BOT_WORLDS", _REPO_WORLDS))
+
+def _worlds_dir() -> Path:
+    """The shipped worlds: the `worlds` package, as `$(find worlds)` finds it in a devel or an
+    install space; outside any ROS environment, the source tree's worlds/."""
+    try:
+        return Path(rospkg.RosPack().get_path("worlds"))
+    except rospkg.ResourceNotFound:
+        return Path(__file__).resolve().parents[3] / "worlds"
+
+
+WORLDS_DIR = _worlds_dir()
 # Sample spacing of line centrelines; the texture and the scoring use the same samples.
 CENTRELINE_SPACING = 0.01
 # Largest ground texture side, to keep memory and warp cost bounded.

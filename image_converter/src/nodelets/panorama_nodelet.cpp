@@ -35,6 +35,7 @@
 #include "image_converter/ros/checked_nodelet.h"
 #include "image_converter/ros/frame_msg.h"
 #include "image_converter/ros/params.h"
+#include "image_converter/ros/publish_last.h"
 #include "image_converter/stitching.h"
 #include "image_converter/velocity_limiter.h"
 
@@ -65,7 +66,7 @@ class PanoramaNodelet : public CheckedNodelet {
  public:
   ~PanoramaNodelet() override {
     if (spinner_) spinner_->stop();
-    if (cmd_pub_) cmd_pub_.publish(geometry_msgs::Twist());  // leave the robot standing
+    if (cmd_pub_) publishLast(cmd_pub_, geometry_msgs::Twist());  // leave the robot standing
   }
 
  private:

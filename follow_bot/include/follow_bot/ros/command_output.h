@@ -16,7 +16,8 @@ namespace follow_bot {
 
 // Publishes geometry_msgs/Twist on `cmd_vel` through a VelocityLimiter, once per call of
 // send(). Two watchdogs, one zero Twist per outage between them, then nothing until frames
-// return; the destructor publishes a last zero:
+// return (the destructor publishes a last zero and holds the publisher 0.1 s of wall time so that
+// it leaves). The watchdogs:
 //  * ROS time: no frame for ~watchdog_timeout of ROS time (sim time under use_sim_time).
 //  * Wall (steady) time: no frame for ~watchdog_timeout of wall time while ROS time has not
 //    advanced for ~watchdog_timeout of wall time either. With use_sim_time, when /clock and the

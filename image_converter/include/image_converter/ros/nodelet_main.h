@@ -47,7 +47,6 @@ inline int runNodelet(int argc, char** argv, const std::string& default_name,
     queue.callAvailable(ros::WallDuration(0.05));
   }
   nodelet.reset();
-  ros::WallDuration(0.1).sleep();  // let the last messages leave before the connections close
   ros::shutdown();
   return 0;
 }
