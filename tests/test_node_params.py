@@ -142,20 +142,20 @@ def master_env():
             "~display must be a bool (true or false), got the string 'banana'",
         ),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_turn_rate:=abc",
             "~turn_rate must be a finite number, got the string 'abc'",
         ),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_return_to_start:=no",
             "~return_to_start must be a bool (true or false), got the string 'no'",
         ),
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
-        ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),
-        ("image_converter panorama", "_detector:=surf", "~detector must be orb or sift"),
-        ("image_converter panorama", "_step_angle_deg:=0", "step_angle must be"),
-        ("image_converter panorama", "_limit_angular:=0", "~limit_angular_accel: max_angular"),
+        ("follow_bot panorama", "_stitch_method:=magic", "~stitch_method must be"),
+        ("follow_bot panorama", "_detector:=surf", "~detector must be orb or sift"),
+        ("follow_bot panorama", "_step_angle_deg:=0", "step_angle must be"),
+        ("follow_bot panorama", "_limit_angular:=0", "~limit_angular must be > 0"),
     ],
 )
 def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, request):

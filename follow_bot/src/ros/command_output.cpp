@@ -51,7 +51,8 @@ CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool all
 CommandOutput::~CommandOutput() {
   timer_.stop();
   wall_timer_.stop();
-  stop();
+  std::lock_guard<std::mutex> lock(mutex_);
+  stopLocked();  // the final zero, always
 }
 
 ros::Time CommandOutput::frameTime(const std_msgs::Header& header) {
@@ -145,7 +146,7 @@ Twist2D CommandOutput::send(const std_msgs::Header& frame, const Twist2D& desire
 
 void CommandOutput::stop() {
   std::lock_guard<std::mutex> lock(mutex_);
-  stopLocked();
+  if (!quiet_) stopLocked();
 }
 
 void CommandOutput::stopLocked() {

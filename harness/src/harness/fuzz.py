@@ -72,9 +72,9 @@ NODES: dict[str, NodeSpec] = {
         {"target": "sign", "sign_image": str(SIGN_IMAGE), "sign_width": SIGN_WIDTH_M},
         probe="sign",
     ),
-    "panorama_idle": NodeSpec("image_converter", "panorama", probe="idle"),
+    "panorama_idle": NodeSpec("follow_bot", "panorama", probe="idle"),
     "panorama_capturing": NodeSpec(
-        "image_converter", "panorama", {"capture_timeout": 3600.0}, probe="turning", capturing=True
+        "follow_bot", "panorama", {"capture_timeout": 3600.0}, probe="turning", capturing=True
     ),
 }
 

@@ -68,7 +68,7 @@ class CommandOutput {
   // when it runs backwards.
   Twist2D send(const std_msgs::Header& frame, const Twist2D& desired, bool active,
                const std::string& state);
-  // Publishes an immediate zero.
+  // Stops now: an immediate zero, unless already stopped (then nothing: cmd_vel stays quiet).
   void stop();
 
  private:
