@@ -50,8 +50,6 @@ from harness.world import WorldError, load_world, resolve_world_path
 # Sim time spent per wall-clock wait while frames are withheld (camera dropout), so that the
 # behaviour's watchdog timers can fire and answer before the next step.
 DROPOUT_WALL_WAIT = 0.01
-# Wall seconds a status may arrive ahead of the cmd_vel it reports (two connections).
-COMMAND_WAIT = 0.5
 
 
 def camera_info_msg(info: dict) -> CameraInfo:
@@ -91,24 +89,20 @@ class CommandInbox:
             self._statuses += 1
             self._cond.notify_all()
 
-    def take(self) -> tuple[int, int, tuple[float, float] | None]:
-        """How many statuses and /cmd_vel commands arrived since the last take(), and the command
-        the last status in that time said it sent (None: no status sent one)."""
+    def take(self) -> tuple[int, int, int, tuple[float, float] | None]:
+        """How many statuses arrived since the last take(), how many of them say a command went
+        out, how many /cmd_vel commands arrived, and the command the last status in that time
+        said it sent (None: no status sent one)."""
         with self._cond:
-            taken = (self._statuses, self._commands, self.status_command)
+            taken = (self._statuses, self._sent, self._commands, self.status_command)
             self._statuses = self._sent = self._commands = 0
             self.status_command = None
             return taken
 
     def wait(self, timeout: float) -> bool:
-        """Wait (wall time) until at least one status is pending, then briefly for the /cmd_vel
-        commands the statuses say were sent (published just before them): each lands in its
-        frame's step, so the per-step counts repeat run to run."""
+        """Wait (wall time) until at least one status is pending."""
         with self._cond:
-            if not self._cond.wait_for(lambda: self._statuses > 0, timeout):
-                return False
-            self._cond.wait_for(lambda: self._commands >= self._sent, COMMAND_WAIT)
-            return True
+            return self._cond.wait_for(lambda: self._statuses > 0, timeout)
 
 
 def find_status_topic(timeout: float) -> str:
@@ -267,9 +261,12 @@ class SimNode:
                     time.sleep(max(0.0, next_wall - time.monotonic()))
                 if video is not None and image is not None:  # after the reply: its overlay too
                     video.write(self.debug_view.frame(image) if self.debug_view else image)
-                replies, commands, sent = self.inbox.take()
+                replies, sent, commands, command = self.inbox.take()
                 if self.lockstep and frame:
-                    applied = sent if sent is not None else applied
+                    # The frame's cmd_vel, as its status reports it: counted and applied in this
+                    # step whenever it arrives on its own connection, so runs repeat exactly.
+                    applied = command if command is not None else applied
+                    commands = sent
                 elif commands or not self.lockstep:
                     applied = self.inbox.latest
                 self.sim.step(

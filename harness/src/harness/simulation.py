@@ -66,7 +66,8 @@ class Record:
     w: list[float] = field(default_factory=list)
     frame: list[bool] = field(default_factory=list)  # a camera frame was published this step
     replies: list[int] = field(default_factory=list)  # behaviour statuses received this step
-    commands: list[int] = field(default_factory=list)  # /cmd_vel messages received this step
+    # /cmd_vel messages this step (lockstep frame steps: as the status reports them)
+    commands: list[int] = field(default_factory=list)
     missed: list[bool] = field(default_factory=list)  # lockstep: no reply to this step's frame
 
     def arrays(self) -> dict[str, np.ndarray]:
