@@ -319,6 +319,11 @@ class NodeUnderTest:
             from follow_bot.msg import LineStatus
 
             self.subs.append(rospy.Subscriber(f"/{self.name}/line", LineStatus, self._on_answer))
+        if spec.probe == "idle":  # an idle behaviour answers on ~status only, never cmd_vel
+            from follow_bot_msgs.msg import BehaviourStatus
+
+            topic = f"/{self.name}/status"
+            self.subs.append(rospy.Subscriber(topic, BehaviourStatus, self._on_answer))
         if spec.probe == "green":
             from follow_bot.msg import BeaconDetections
 
@@ -340,7 +345,7 @@ class NodeUnderTest:
                 or any(values[1:5])
             ):
                 self.over_limit += 1
-            if self.spec.probe in ("twist", "idle", "turning"):
+            if self.spec.probe in ("twist", "turning"):
                 self.answers.append(msg)
 
     def _on_answer(self, msg):
@@ -436,6 +441,8 @@ class NodeUnderTest:
         alive = self.process.poll() is None
         code = self.process.returncode
         probe_error = self.probe() if alive else "process died"
+        if self.spec.probe == "idle" and self.twists and not probe_error:
+            probe_error = f"idle node sent {self.twists} cmd_vel Twists"
         alive = alive and self.process.poll() is None
         stop(self.process)
         self.log.close()
@@ -481,9 +488,9 @@ def check_answer(probe: str, answers: list) -> str:
         if abs(z - expected) > 0.05 * expected or abs(last.pose.position.x) > 0.05:
             return f"marker at z={z:.3f} x={last.pose.position.x:.3f}, expected z={expected:.3f}"
         return ""
-    if probe == "idle":
-        if any(t.linear.x != 0.0 or t.angular.z != 0.0 for t in answers):
-            return f"idle panorama moved: {answers[-1]}"
+    if probe == "idle":  # BehaviourStatus answers
+        if any(s.active or s.command_sent for s in answers):
+            return f"idle panorama steering: {last.state}, sent {last.command_sent}"
         return ""
     if probe == "turning":
         if not last.angular.z > 0.0:
