@@ -6,7 +6,7 @@ odom -> base_link; subscribes /cmd_vel and the behaviour's per-frame status
 
 Lockstep (default): publish frame k, wait for the one status the behaviour answers with (up to
 ~reply_timeout wall seconds; a miss is counted), apply the command it says it sent on cmd_vel
-(none sent: an idle behaviour, the previous command is held, which its last zero made a stop),
+(none sent: the behaviour is quiet, its last command was a zero, the robot stands),
 integrate one step, repeat: runs are repeatable and as fast as the behaviour. Steps without a
 frame (camera dropout) apply what arrives on /cmd_vel (the watchdog's stop). Real-time
 (~lockstep false): frames at ~rate_hz of wall clock, the latest /cmd_vel applied.
@@ -264,8 +264,10 @@ class SimNode:
                 replies, sent, commands, command = self.inbox.take()
                 if self.lockstep and frame:
                     # The frame's cmd_vel, as its status reports it: counted and applied in this
-                    # step whenever it arrives on its own connection, so runs repeat exactly.
-                    applied = command if command is not None else applied
+                    # step whenever it arrives on its own connection, so runs repeat exactly. No
+                    # command: the behaviour is quiet, its last cmd_vel was a zero (its idle
+                    # stop, the watchdog's or ~enable's), so the robot stands.
+                    applied = command if command is not None else (0.0, 0.0)
                     commands = sent
                 elif commands or not self.lockstep:
                     applied = self.inbox.latest
