@@ -262,7 +262,10 @@ def probe_frame(probe: str):
         image[y0 : y0 + 200, x0 : x0 + 240] = sign
     elif probe == "overlay":
         image = np.full((64, 64, 3), 90, np.uint8)
-    return bgr_msg(image, (int(time.time()), 0))
+    # Stamped now to the nanosecond, as a camera does: limiters ramp by the time between stamps
+    # (a capturing panorama stopped by the watchdog turns again only as its stamps advance).
+    now = time.time_ns()
+    return bgr_msg(image, (now // 10**9, now % 10**9))
 
 
 def expected_range(probe: str) -> float | None:
