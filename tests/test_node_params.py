@@ -164,39 +164,39 @@ def master_env():
             "~display must be a bool (true or false), got the string 'banana'",
         ),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_max_angular:=abc",
             "~max_angular must be a finite number in [0.01, 10], got the string 'abc'",
         ),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_return_to_start:=no",
             "~return_to_start must be a bool (true or false), got the string 'no'",
         ),
         ("image_converter image_converter", "_image_transport:=nope", "~image_transport 'nope'"),
-        ("image_converter panorama", "_stitch_method:=magic", "~stitch_method must be"),
-        ("image_converter panorama", "_detector:=surf", "~detector must be orb or sift"),
+        ("follow_bot panorama", "_stitch_method:=magic", "~stitch_method must be"),
+        ("follow_bot panorama", "_detector:=surf", "~detector must be orb or sift"),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_step_angle_deg:=0",
             "~step_angle_deg must be in [0.5, 359], got 0",
         ),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_step_angle_deg:=200",
             "~step_angle_deg must be at most ~total_angle_deg, got 200 and 120",
         ),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_min_angular:=1",
             "~min_angular must be at most ~max_angular, got 1 and 0.5",
         ),
         (
-            "image_converter panorama",
+            "follow_bot panorama",
             "_yaw_tolerance_deg:=10",
             "~yaw_tolerance_deg must be below ~step_angle_deg / 2, got 10 and 20",
         ),
-        ("image_converter panorama", "_limit_angular:=0", "~limit_angular must be > 0, got 0"),
+        ("follow_bot panorama", "_limit_angular:=0", "~limit_angular must be > 0, got 0"),
     ],
 )
 def test_bad_parameter_is_a_named_startup_error(master_env, node, param, words, request):

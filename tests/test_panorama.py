@@ -59,7 +59,7 @@ def capture(tmp_path_factory) -> tuple[dict, np.ndarray | None]:
     port = free_port()
     env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
     launch = subprocess.Popen(
-        ["roslaunch", "-p", str(port), "image_converter", "panorama.launch"],
+        ["roslaunch", "-p", str(port), "follow_bot", "panorama.launch"],
         env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
     )  # fmt: skip
     try:

@@ -111,10 +111,13 @@ def test_metrics_report_dropout_stop_delay_and_reply_counts():
         "t": t, "x": 0.2 * t, "y": np.zeros_like(t), "yaw": np.zeros_like(t),
         "v": v, "w": np.zeros_like(t), "frame": (t < 1.0) | (t >= 2.0),
         "replies": np.ones_like(t, dtype=int), "missed": np.zeros_like(t, dtype=bool),
+        # cmd_vel: one per frame, the watchdog's stop at 1.1 s, one stray command at 1.5 s
+        "commands": ((t < 1.0) | (t >= 2.0) | np.isclose(t, 1.1) | np.isclose(t, 1.5)).astype(int),
     }  # fmt: skip
     values = metrics(scenario, world, run)
     assert values["dropouts"][0]["stop_delay"] == pytest.approx(0.2)
     assert values["dropouts"][0]["moving_after_stop"] == 0
+    assert values["dropouts"][0]["commands_after_stop"] == 1  # cmd_vel, not status replies
     assert values["replies"] == {"frames": 20, "extra": 0, "missing": 0}
     assert "cross_track" in values and "lap" in values
     # The runner's own criteria come first, the file's replies.extra takes their place.

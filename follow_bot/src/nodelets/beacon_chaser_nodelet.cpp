@@ -1,5 +1,6 @@
 // Beacon chaser: Lab 5's "follow green, stop at red" and the lecture's "approach the dumpster and
-// stop 1 m in front of it", as one nodelet. One camera frame in, one Twist out.
+// stop 1 m in front of it", as one nodelet. One camera frame in, one status out; a Twist while
+// it searches or approaches, silence while it stands still.
 //
 // Thin wiring around ColourBlobDetector and BeaconController; CommandOutput adds limits, the
 // frame watchdog and the final stop. Thresholds and gains are ~params, also live through
@@ -111,6 +112,12 @@ BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
   return controller;
 }
 
+// Searching and approaching steer; the states that stand still (holding a stop, arrived, or
+// lost in approach mode, which has nothing to follow) are idle.
+bool steers(BeaconState state) {
+  return state == BeaconState::kSearching || state == BeaconState::kApproaching;
+}
+
 }  // namespace
 
 class BeaconChaserNodelet : public image_converter::CheckedNodelet {
@@ -191,16 +198,15 @@ class BeaconChaserNodelet : public image_converter::CheckedNodelet {
     }
     output_->frameArrived();
     const BlobResult blobs = detector_->detect(frame->image);
-    const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
     Twist2D desired;
     if (settings_.controller.mode == BeaconMode::kApproach && !has_intrinsics_) {
       NODELET_WARN_THROTTLE(2.0, "approach needs camera_info on %s for ranges: holding still",
                             camera_info_sub_.getTopic().c_str());
     } else {
-      desired = controller_->update(blobs, stamp.toSec());
+      desired = controller_->update(blobs, CommandOutput::frameTime(msg->header).toSec());
     }
-    const Twist2D command = output_->send(desired, stamp);
-    output_->setState(toString(controller_->state()));
+    const BeaconState state = controller_->state();
+    const Twist2D command = output_->send(msg->header, desired, steers(state), toString(state));
     publishDetections(*msg, blobs, command);
     if (debug_pub_.getNumSubscribers() > 0) publishDebug(*frame, blobs);
   }

@@ -1,4 +1,5 @@
-// Follower: the lecture's Follow-Bot as a nodelet. One camera frame in, one Twist out.
+// Follower: the lecture's Follow-Bot as a nodelet. One camera frame in, one status out; a Twist
+// while it follows or searches, silence once it has given up.
 //
 // Thin wiring around LineDetector (band-only HSV threshold + moments) and LineController
 // (lecture law or PD with line search); CommandOutput adds limits, the frame watchdog and the
@@ -201,10 +202,11 @@ class FollowerNodelet : public image_converter::CheckedNodelet {
 
   LineStatus follow(const cv_bridge::CvImage& frame, const sensor_msgs::Image& msg) {
     const LineMeasurement seen = detector_->detect(frame.image);
-    const ros::Time stamp = msg.header.stamp.isZero() ? ros::Time::now() : msg.header.stamp;
-    const Twist2D command = output_->send(steer(seen, stamp.toSec()), stamp);
+    const Twist2D desired = steer(seen, CommandOutput::frameTime(msg.header).toSec());
+    // Idle once it has given up: any sighting makes it active again.
+    const Twist2D command =
+        output_->send(msg.header, desired, state() != LineState::kGaveUp, toString(state()));
     last_command_ = command;
-    output_->setState(toString(state()));
     if (!seen.band.found) NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(state()));
     if (debug_pub_.getNumSubscribers() > 0) {
       cv_bridge::CvImage debug(msg.header, "bgr8", frame.image.clone());

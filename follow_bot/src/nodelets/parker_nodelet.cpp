@@ -1,5 +1,5 @@
 // Parker: find the parking marker (an AprilTag or a textured sign) and servo the robot to park
-// square in front of it. One camera frame in, one Twist out.
+// square in front of it. One camera frame in, one status out; a Twist until it is parked.
 //
 // Thin wiring around a MarkerDetector (TagDetector or SignDetector, by ~target) and
 // ParkingServo; CommandOutput adds limits (reversing allowed), the frame watchdog and the final
@@ -171,7 +171,6 @@ class ParkerNodelet : public image_converter::CheckedNodelet {
       return;
     }
     output_->frameArrived();
-    const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
     std::optional<MarkerObservation> marker;
     Twist2D desired;
     if (!has_intrinsics_) {
@@ -182,13 +181,14 @@ class ParkerNodelet : public image_converter::CheckedNodelet {
       cv::Mat gray;
       cv::cvtColor(frame->image, gray, cv::COLOR_BGR2GRAY);
       marker = detector_->detect(gray, camera_);
-      desired = servo_->update(marker, stamp.toSec());
+      desired = servo_->update(marker, CommandOutput::frameTime(msg->header).toSec());
     }
-    output_->send(desired, stamp);
     std_msgs::String state;
     state.data = has_intrinsics_ ? toString(servo_->state()) : "searching";
+    // Idle once parked (the servo then commands zero): a push out of tolerance re-activates it.
+    const bool parked = has_intrinsics_ && servo_->state() == ParkingState::kParked;
+    output_->send(msg->header, desired, !parked, state.data);
     state_pub_.publish(state);
-    output_->setState(state.data);
     if (marker) publishPose(msg->header, *marker);
     if (debug_pub_.getNumSubscribers() > 0) publishDebug(*frame, marker, state.data);
   }

@@ -72,9 +72,9 @@ NODES: dict[str, NodeSpec] = {
         {"target": "sign", "sign_image": str(SIGN_IMAGE), "sign_width": SIGN_WIDTH_M},
         probe="sign",
     ),
-    "panorama_idle": NodeSpec("image_converter", "panorama", probe="idle"),
+    "panorama_idle": NodeSpec("follow_bot", "panorama", probe="idle"),
     "panorama_capturing": NodeSpec(
-        "image_converter", "panorama", {"capture_timeout": 3600.0}, probe="turning", capturing=True
+        "follow_bot", "panorama", {"capture_timeout": 3600.0}, probe="turning", capturing=True
     ),
 }
 
@@ -262,7 +262,10 @@ def probe_frame(probe: str):
         image[y0 : y0 + 200, x0 : x0 + 240] = sign
     elif probe == "overlay":
         image = np.full((64, 64, 3), 90, np.uint8)
-    return bgr_msg(image, (int(time.time()), 0))
+    # Stamped now to the nanosecond, as a camera does: limiters ramp by the time between stamps
+    # (a capturing panorama stopped by the watchdog turns again only as its stamps advance).
+    now = time.time_ns()
+    return bgr_msg(image, (now // 10**9, now % 10**9))
 
 
 def expected_range(probe: str) -> float | None:
@@ -319,6 +322,11 @@ class NodeUnderTest:
             from follow_bot.msg import LineStatus
 
             self.subs.append(rospy.Subscriber(f"/{self.name}/line", LineStatus, self._on_answer))
+        if spec.probe == "idle":  # an idle behaviour answers on ~status only, never cmd_vel
+            from follow_bot_msgs.msg import BehaviourStatus
+
+            topic = f"/{self.name}/status"
+            self.subs.append(rospy.Subscriber(topic, BehaviourStatus, self._on_answer))
         if spec.probe == "green":
             from follow_bot.msg import BeaconDetections
 
@@ -340,7 +348,7 @@ class NodeUnderTest:
                 or any(values[1:5])
             ):
                 self.over_limit += 1
-            if self.spec.probe in ("twist", "idle", "turning"):
+            if self.spec.probe in ("twist", "turning"):
                 self.answers.append(msg)
 
     def _on_answer(self, msg):
@@ -436,6 +444,8 @@ class NodeUnderTest:
         alive = self.process.poll() is None
         code = self.process.returncode
         probe_error = self.probe() if alive else "process died"
+        if self.spec.probe == "idle" and self.twists and not probe_error:
+            probe_error = f"idle node sent {self.twists} cmd_vel Twists"
         alive = alive and self.process.poll() is None
         stop(self.process)
         self.log.close()
@@ -481,9 +491,9 @@ def check_answer(probe: str, answers: list) -> str:
         if abs(z - expected) > 0.05 * expected or abs(last.pose.position.x) > 0.05:
             return f"marker at z={z:.3f} x={last.pose.position.x:.3f}, expected z={expected:.3f}"
         return ""
-    if probe == "idle":
-        if any(t.linear.x != 0.0 or t.angular.z != 0.0 for t in answers):
-            return f"idle panorama moved: {answers[-1]}"
+    if probe == "idle":  # BehaviourStatus answers
+        if any(s.active or s.command_sent for s in answers):
+            return f"idle panorama steering: {last.state}, sent {last.command_sent}"
         return ""
     if probe == "turning":
         if not last.angular.z > 0.0:

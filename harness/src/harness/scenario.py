@@ -231,7 +231,7 @@ def _start_pose(value: Any, where: str, world_path: Path) -> tuple[float, float,
 
 def runner_criteria(world_path: Path, lockstep: bool) -> dict[str, Criterion]:
     """What every run must meet, whatever its file says: finite commands within the world
-    robot's limits and, in lockstep, exactly one reply to every frame."""
+    robot's limits and, in lockstep, exactly one reply (the behaviour's status) to every frame."""
     robot = load_world(world_path).robot
     rules = [
         Criterion("commands.non_finite", equals=0),
@@ -500,7 +500,7 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         stop = _stop_in_window(run, start, end)
         t_stop = stop["t_stop"]
         after_stop_step = (t > t_stop) & (t < end) if t_stop is not None else np.zeros_like(t, bool)
-        stop["commands_after_stop"] = int(run["replies"][after_stop_step].sum())
+        stop["commands_after_stop"] = int(run["commands"][after_stop_step].sum())
         dropouts.append(stop)
     if dropouts:
         out["dropouts"] = dropouts

@@ -174,7 +174,7 @@ def _max_rate(t: np.ndarray, a: np.ndarray) -> float:
 
 def command_stats(t, v, w, missed_replies: int = 0) -> dict:
     """Extremes of the commanded (v, w) and their rates; non-finite samples are counted,
-    not used. `missed_replies` (frames without a command) is passed through for the report.
+    not used. `missed_replies` (frames without a status reply) is passed through for the report.
     """
     times, lin, ang = (np.asarray(a, dtype=float) for a in (t, v, w))
     if not len(times) == len(lin) == len(ang):

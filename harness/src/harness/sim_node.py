@@ -1,16 +1,21 @@
 """`rosrun harness sim`: the simulator as a ROS node (a thin shell around Simulation).
 
 Publishes /clock, the camera image and camera_info, the true pose (/sim/pose) and tf
-odom -> base_link; subscribes /cmd_vel.
+odom -> base_link; subscribes /cmd_vel and the behaviour's per-frame status
+(follow_bot_msgs/BehaviourStatus, docs/behaviour_contract.md).
 
-Lockstep (default): publish frame k, wait for the one Twist the behaviour answers with (up to
-~reply_timeout wall seconds; a miss is counted and the previous command held), integrate one
-step, repeat: runs are repeatable and as fast as the behaviour. Real-time (~lockstep false):
-frames at ~rate_hz of wall clock, the latest command applied.
+Lockstep (default): publish frame k, wait for the one status the behaviour answers with (up to
+~reply_timeout wall seconds; a miss is counted), apply the command it says it sent on cmd_vel
+(none sent: the behaviour is quiet, its last command was a zero, the robot stands),
+integrate one step, repeat: runs are repeatable and as fast as the behaviour. Steps without a
+frame (camera dropout) apply what arrives on /cmd_vel (the watchdog's stop). Real-time
+(~lockstep false): frames at ~rate_hz of wall clock, the latest /cmd_vel applied.
 
 Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and perturbations) or
 ~world (a world YAML or name), ~rate_hz (30), ~duration (s, 0 = forever), ~lockstep (true),
-~reply_timeout (2.0 wall s), ~record (path of an .npz trajectory log written at the end),
+~reply_timeout (2.0 wall s), ~status (the behaviour's status topic, e.g. /follower/status;
+"" finds the one BehaviourStatus topic published), ~record (path of an .npz trajectory log
+written at the end),
 ~video (path of an MP4 of the camera view, optional), ~video_debug (the behaviour's namespace,
 default /follower: the video shows its ~debug_image and the state and command of its ~line beside
 the camera view; "" for the camera view alone), ~wait_for_behaviour (20 wall s).
@@ -34,6 +39,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image
 
+from follow_bot_msgs.msg import BehaviourStatus
 from harness.debug_video import DebugView
 from harness.ros_image import bgr_to_msg
 from harness.scenario import ScenarioError, load_scenario
@@ -56,29 +62,61 @@ def camera_info_msg(info: dict) -> CameraInfo:
 
 
 class CommandInbox:
-    """Collects /cmd_vel messages from the subscriber thread for the stepping loop."""
+    """Collects /cmd_vel commands and the behaviour's statuses from the subscriber threads for
+    the stepping loop. A frame's command is taken from its status (which says what it sent), so
+    it cannot race the reply on the other connection; /cmd_vel is counted, and applied on steps
+    without a frame (the watchdog's stop)."""
 
     def __init__(self):
         self._cond = threading.Condition()
-        self._count = 0
-        self.latest = (0.0, 0.0)
+        self._statuses = 0
+        self._sent = 0  # statuses that say a command went out on cmd_vel
+        self._commands = 0
+        self.status_command: tuple[float, float] | None = None  # sent by the latest status
+        self.latest = (0.0, 0.0)  # the latest /cmd_vel
 
-    def put(self, msg: Twist) -> None:
+    def put_command(self, msg: Twist) -> None:
         with self._cond:
             self.latest = (msg.linear.x, msg.angular.z)
-            self._count += 1
+            self._commands += 1
             self._cond.notify_all()
 
-    def take(self) -> int:
-        """How many commands arrived since the last take()."""
+    def put_status(self, msg: BehaviourStatus) -> None:
         with self._cond:
-            count, self._count = self._count, 0
-            return count
+            if msg.command_sent:
+                self.status_command = (msg.command.linear.x, msg.command.angular.z)
+                self._sent += 1
+            self._statuses += 1
+            self._cond.notify_all()
+
+    def take(self) -> tuple[int, int, int, tuple[float, float] | None]:
+        """How many statuses arrived since the last take(), how many of them say a command went
+        out, how many /cmd_vel commands arrived, and the command the last status in that time
+        said it sent (None: no status sent one)."""
+        with self._cond:
+            taken = (self._statuses, self._sent, self._commands, self.status_command)
+            self._statuses = self._sent = self._commands = 0
+            self.status_command = None
+            return taken
 
     def wait(self, timeout: float) -> bool:
-        """Wait (wall time) until at least one command is pending."""
+        """Wait (wall time) until at least one status is pending."""
         with self._cond:
-            return self._cond.wait_for(lambda: self._count > 0, timeout)
+            return self._cond.wait_for(lambda: self._statuses > 0, timeout)
+
+
+def find_status_topic(timeout: float) -> str:
+    """The one topic of type BehaviourStatus in the graph (waits for it up to `timeout` s)."""
+    deadline = time.monotonic() + timeout
+    while not rospy.is_shutdown():
+        topics = [name for name, kind in rospy.get_published_topics()
+                  if kind == BehaviourStatus._type]  # fmt: skip
+        if len(topics) > 1:
+            raise ValueError(f"several behaviour status topics {topics}: set ~status")
+        if topics or time.monotonic() >= deadline:
+            return topics[0] if topics else ""
+        time.sleep(0.05)
+    return ""
 
 
 class SimNode:
@@ -121,7 +159,9 @@ class SimNode:
             self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=None)
         self.pose_pub = rospy.Publisher("/sim/pose", Odometry, queue_size=1)
         self.tf = tf2_ros.TransformBroadcaster()
-        self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self.inbox.put, queue_size=10)
+        self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self.inbox.put_command, queue_size=10)
+        self.status_topic = rospy.get_param("~status", "")
+        self.status_sub = None
 
     # -- helpers ----------------------------------------------------------------------------
 
@@ -157,15 +197,27 @@ class SimNode:
         tf.transform.rotation = odom.pose.pose.orientation
         self.tf.sendTransform(tf)
 
+    def _subscribe_status(self, timeout: float) -> None:
+        topic = self.status_topic or find_status_topic(timeout)
+        if not topic:
+            rospy.logwarn("sim: no behaviour status topic found; every frame will count as missed")
+            return
+        # A queue: every frame's answer counts, none may be dropped.
+        self.status_sub = rospy.Subscriber(
+            topic, BehaviourStatus, self.inbox.put_status, queue_size=100, tcp_nodelay=True
+        )
+
     def _wait_for_behaviour(self) -> None:
-        """Lockstep needs a listener on the image and a publisher on /cmd_vel before frame 0."""
+        """Lockstep needs a listener on the image and a publisher of the status before frame 0."""
         deadline = time.monotonic() + self.wait_for_behaviour
+        self._subscribe_status(self.wait_for_behaviour)
         while not rospy.is_shutdown() and time.monotonic() < deadline:
-            if self.image_pub.get_num_connections() and self.cmd_sub.get_num_connections():
+            status_up = self.status_sub is not None and self.status_sub.get_num_connections()
+            if self.image_pub.get_num_connections() and status_up:
                 time.sleep(0.2)  # let the other connections (camera_info, clock) settle too
                 return
             time.sleep(0.02)
-        rospy.logwarn("sim: no behaviour connected to the camera and /cmd_vel; running anyway")
+        rospy.logwarn("sim: no behaviour connected to the camera and its status; running anyway")
 
     def _finished(self) -> bool:
         if self.duration and self.sim.time >= self.duration - 1e-9:
@@ -189,6 +241,7 @@ class SimNode:
         if self.lockstep:
             self._wait_for_behaviour()
         self.inbox.take()  # forget anything sent before the run started
+        applied = (0.0, 0.0)  # the robot starts still; an idle behaviour's silence holds this
         period = 1.0 / self.rate_hz
         next_wall = loop_start = time.monotonic()
         try:
@@ -208,8 +261,19 @@ class SimNode:
                     time.sleep(max(0.0, next_wall - time.monotonic()))
                 if video is not None and image is not None:  # after the reply: its overlay too
                     video.write(self.debug_view.frame(image) if self.debug_view else image)
-                replies = self.inbox.take()
-                self.sim.step(self.inbox.latest, frame=frame, replies=replies, missed=missed)
+                replies, sent, commands, command = self.inbox.take()
+                if self.lockstep and frame:
+                    # The frame's cmd_vel, as its status reports it: counted and applied in this
+                    # step whenever it arrives on its own connection, so runs repeat exactly. No
+                    # command: the behaviour is quiet, its last cmd_vel was a zero (its idle
+                    # stop, the watchdog's or ~enable's), so the robot stands.
+                    applied = command if command is not None else (0.0, 0.0)
+                    commands = sent
+                elif commands or not self.lockstep:
+                    applied = self.inbox.latest
+                self.sim.step(
+                    applied, frame=frame, replies=replies, commands=commands, missed=missed
+                )
         finally:
             if video is not None:
                 video.release()

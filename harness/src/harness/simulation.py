@@ -66,7 +66,9 @@ class Record:
     v: list[float] = field(default_factory=list)
     w: list[float] = field(default_factory=list)
     frame: list[bool] = field(default_factory=list)  # a camera frame was published this step
-    replies: list[int] = field(default_factory=list)  # commands received during this step
+    replies: list[int] = field(default_factory=list)  # behaviour statuses received this step
+    # /cmd_vel messages this step (lockstep frame steps: as the status reports them)
+    commands: list[int] = field(default_factory=list)
     missed: list[bool] = field(default_factory=list)  # lockstep: no reply to this step's frame
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -80,6 +82,7 @@ class Record:
             "w": np.asarray(self.w, dtype=float),
             "frame": np.asarray(self.frame, dtype=bool),
             "replies": np.asarray(self.replies, dtype=int),
+            "commands": np.asarray(self.commands, dtype=int),
             "missed": np.asarray(self.missed, dtype=bool),
         }
 
@@ -160,7 +163,15 @@ class Simulation:
         """The camera frame at the current step (noise keyed by the step, so reruns match)."""
         return self.renderer.render(self.pose, frame=self.step_index, hidden=self.hidden_now())
 
-    def step(self, command: tuple[float, float], *, frame: bool, replies: int, missed: bool):
+    def step(
+        self,
+        command: tuple[float, float],
+        *,
+        frame: bool,
+        replies: int,
+        missed: bool,
+        commands: int | None = None,
+    ):
         """Log the step that is ending, then move the robot by `command` over one period."""
         v, w = command
         self.record.t.append(self.time)
@@ -169,6 +180,7 @@ class Simulation:
         self.record.w.append(w)
         self.record.frame.append(frame)
         self.record.replies.append(replies)
+        self.record.commands.append(replies if commands is None else commands)
         self.record.missed.append(missed)
         # The robot's own controller ignores a non-finite command rather than integrating NaN.
         safe = (v, w) if math.isfinite(v) and math.isfinite(w) else (0.0, 0.0)

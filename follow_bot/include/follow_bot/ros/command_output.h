@@ -1,23 +1,36 @@
-// The one way a behaviour node commands the base: limits, a frame watchdog and a final stop.
+// The one way a behaviour node commands the base: limits, active/idle, ~enable, the per-frame
+// ~status, a frame watchdog and a final stop.
 #pragma once
 
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <diagnostic_updater/update_functions.h>
 #include <ros/ros.h>
+#include <std_msgs/Header.h>
+#include <std_srvs/SetBool.h>
 
 #include "follow_bot/frame_watchdog.h"
 #include "follow_bot/velocity_limiter.h"
 
 namespace follow_bot {
 
-// Publishes geometry_msgs/Twist on `cmd_vel` through a VelocityLimiter, once per call of
-// send(). Two watchdogs, one zero Twist per outage between them, then nothing until frames
-// return (the destructor publishes a last zero and holds the publisher 0.1 s of wall time so that
-// it leaves). The watchdogs:
+// Publishes geometry_msgs/Twist on `cmd_vel` through a VelocityLimiter while the behaviour is
+// active (docs/behaviour_contract.md):
+//  * send() once per processed frame, saying whether the behaviour steers (active) or not
+//    (idle). Active: the limited command goes out. Idle: the limited command goes out until it
+//    reaches zero (the limiter's ramp down, exactly as while active), that one zero included,
+//    then nothing until the behaviour is active again. A node that starts idle sends nothing.
+//  * ~enable (std_srvs/SetBool): false publishes one zero at once and keeps the node idle
+//    whatever it sees (the limiter ramps up from zero after true).
+//  * ~status (follow_bot_msgs/BehaviourStatus): one per send(), stamped with the frame's stamp:
+//    state, active, whether a command went out and which. The lockstep simulator waits for it.
+// Two watchdogs, one zero Twist per outage between them (none when already stopped), then
+// nothing until frames return; the destructor publishes a last zero and holds the publisher
+// 0.1 s of wall time so that it leaves. The watchdogs:
 //  * ROS time: no frame for ~watchdog_timeout of ROS time (sim time under use_sim_time).
 //  * Wall (steady) time: no frame for ~watchdog_timeout of wall time while ROS time has not
 //    advanced for ~watchdog_timeout of wall time either. With use_sim_time, when /clock and the
@@ -41,28 +54,40 @@ class CommandOutput {
   CommandOutput(const CommandOutput&) = delete;
   CommandOutput& operator=(const CommandOutput&) = delete;
 
+  // The time a frame stands for: its stamp, or now when it has none.
+  static ros::Time frameTime(const std_msgs::Header& header);
+
   // Records that a usable frame arrived now.
   void frameArrived();
   // Records a frame dropped by the checks; `reason` is the check's message.
   void frameDropped(const std::string& reason);
-  // The behaviour's state for the diagnostics (searching, approaching, ...).
-  void setState(const std::string& state) { state_ = state; }
-  // Limits `desired` (acceleration against the previous send, `stamp` being the frame's time)
-  // and publishes it. Returns what was published. Any stamps are safe: the time since the
-  // previous send is taken as at most ~watchdog_timeout, and as none when it runs backwards.
-  Twist2D send(const Twist2D& desired, const ros::Time& stamp);
-  // Publishes an immediate zero.
+  // One processed frame's decision. Limits `desired` (acceleration against the previous send,
+  // frameTime(frame) being the frame's time), publishes it per the active/idle rules above and
+  // publishes the frame's ~status; `state` names the behaviour's state (status, diagnostics).
+  // Returns the limited command: what the robot was told, or zero when quiet. Any stamps are
+  // safe: the time since the previous send is taken as at most ~watchdog_timeout, and as none
+  // when it runs backwards.
+  Twist2D send(const std_msgs::Header& frame, const Twist2D& desired, bool active,
+               const std::string& state);
+  // Stops now: an immediate zero, unless already stopped (then nothing: cmd_vel stays quiet).
   void stop();
 
  private:
+  void stopLocked();
   void publish(const Twist2D& command);
+  bool onEnable(std_srvs::SetBool::Request& request, std_srvs::SetBool::Response& response);
   void checkWatchdog(const ros::TimerEvent&);
   void checkWatchdogNow();
   void checkWallWatchdog(const ros::SteadyTimerEvent&);
   void stopForOutage(const char* clock, double since, double now);
   void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
 
+  std::mutex mutex_;  // frames, ~enable and the watchdog timers may run on different threads
   ros::Publisher publisher_;
+  ros::Publisher status_pub_;
+  ros::ServiceServer enable_srv_;
+  bool enabled_ = true;
+  bool quiet_ = true;  // the last command published (or none yet) is a zero: idle sends nothing
   ros::Timer timer_;
   ros::SteadyTimer wall_timer_;
   VelocityLimiter limiter_;

@@ -10,5 +10,6 @@ namespace follow_bot {
 std::unique_ptr<nodelet::Nodelet> makeFollowerNodelet();
 std::unique_ptr<nodelet::Nodelet> makeBeaconChaserNodelet();
 std::unique_ptr<nodelet::Nodelet> makeParkerNodelet();
+std::unique_ptr<nodelet::Nodelet> makePanoramaNodelet();
 
 }  // namespace follow_bot

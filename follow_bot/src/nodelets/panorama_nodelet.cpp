@@ -1,10 +1,11 @@
 // Panorama: on a ~capture call the robot turns in place through a set of headings, grabs a
 // frame at each, stitches them and publishes the panorama (latched) on ~panorama.
 //
-// Thin wiring around PanoramaCapture (the turn schedule), the stitching core and the shared
-// VelocityLimiter. One camera frame in, one Twist out (zero while idle), so it runs under the
-// lockstep simulator as well as on a robot. The service waits on its own callback queue while
-// the frames drive the capture on the nodelet's queue.
+// Thin wiring around image_converter's PanoramaCapture (the turn schedule) and stitching core;
+// CommandOutput adds limits, the frame watchdog, ~enable, ~status and the final stop. One camera
+// frame in, one status out; a Twist only during a capture (idle otherwise: no cmd_vel at all).
+// The service waits on its own callback queue while the frames drive the capture on the
+// nodelet's queue.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,7 +21,6 @@
 
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <geometry_msgs/Twist.h>
 #include <image_transport/image_transport.h>
 #include <nav_msgs/Odometry.h>
 #include <nodelet/nodelet.h>
@@ -29,17 +29,27 @@
 #include <std_srvs/Trigger.h>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "image_converter/PanoramaConfig.h"
+#include "follow_bot/PanoramaConfig.h"
+#include "follow_bot/ros/command_output.h"
+#include "follow_bot/ros/nodelets.h"
 #include "image_converter/panorama_capture.h"
-#include "image_converter/panorama_nodelet.h"
 #include "image_converter/ros/checked_nodelet.h"
 #include "image_converter/ros/frame_msg.h"
 #include "image_converter/ros/params.h"
 #include "image_converter/ros/publish_last.h"
 #include "image_converter/stitching.h"
-#include "image_converter/velocity_limiter.h"
 
-namespace image_converter {
+namespace follow_bot {
+
+using image_converter::bgrView;
+using image_converter::guardedCallback;
+using image_converter::MatchOptions;
+using image_converter::PanoramaCapture;
+using image_converter::PanoramaCaptureConfig;
+using image_converter::param;
+using image_converter::StitchResult;
+using image_converter::TurningCamera;
+using image_converter::wrapAngle;
 
 namespace {
 
@@ -62,11 +72,10 @@ double yawOf(const nav_msgs::Odometry& odom) {
 
 }  // namespace
 
-class PanoramaNodelet : public CheckedNodelet {
+class PanoramaNodelet : public image_converter::CheckedNodelet {
  public:
   ~PanoramaNodelet() override {
-    if (spinner_) spinner_->stop();
-    if (cmd_pub_) publishLast(cmd_pub_, geometry_msgs::Twist());  // leave the robot standing
+    if (spinner_) spinner_->stop();  // output_ then sends the final zero
   }
 
  private:
@@ -74,8 +83,8 @@ class PanoramaNodelet : public CheckedNodelet {
     ros::NodeHandle& nh = getNodeHandle();
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     readParams(pnh);  // throws on bad ~params
+    output_ = std::make_unique<CommandOutput>(nh, pnh);
 
-    cmd_pub_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
     panorama_pub_ = pnh.advertise<sensor_msgs::Image>("panorama", 1, /*latch=*/true);
     camera_info_sub_ = nh.subscribe("camera_info", 1, &PanoramaNodelet::onCameraInfo, this);
     odom_sub_ = nh.subscribe("odom", 1, &PanoramaNodelet::onOdom, this);
@@ -139,10 +148,6 @@ class PanoramaNodelet : public CheckedNodelet {
       throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
     }
 
-    VelocityLimiterConfig limits;
-    limits.max_angular = positiveParam(pnh, "limit_angular", limits.max_angular);
-    limits.max_angular_accel = positiveParam(pnh, "limit_angular_accel", limits.max_angular_accel);
-    limiter_ = std::make_unique<VelocityLimiter>(limits);
   }
 
   // Every callback runs guarded: an exception drops the message, never the node.
@@ -203,8 +208,7 @@ class PanoramaNodelet : public CheckedNodelet {
       if (silent > frame_timeout_ || timed_out || !ros::ok()) {
         capture_->abort();
         start_requested_ = false;
-        cmd_pub_.publish(geometry_msgs::Twist());
-        limiter_->stop();
+        output_->stop();  // the watchdog has mostly done so already
         outcome_ = Outcome{false, timed_out ? "capture took longer than ~capture_timeout"
                                             : "camera frames stopped during the capture"};
         ++aborts_;
@@ -229,18 +233,11 @@ class PanoramaNodelet : public CheckedNodelet {
     updater_->update();
     if (!frame) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
-      ++dropped_[problemKind(error)];
-      ++dropped_since_report_;
+      output_->frameDropped(error);
       return;
     }
-    ++frames_accepted_;
+    output_->frameArrived();
     last_frame_wall_ = ros::WallTime::now().toSec();
-    const ros::Time stamp = msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp;
-    // In double seconds (ros::Time's difference throws beyond 2^31 s); a gap longer than
-    // ~frame_timeout counts as that, so acceleration stays bounded whatever the stamps say.
-    const double dt =
-        last_stamp_.isZero() ? 0.0 : std::min(stamp.toSec() - last_stamp_.toSec(), frame_timeout_);
-    last_stamp_ = stamp;
 
     if (start_requested_ && yaw_) {
       start_requested_ = false;
@@ -256,7 +253,8 @@ class PanoramaNodelet : public CheckedNodelet {
     }
     Twist2D desired;
     desired.angular = step.angular;
-    publish(limiter_->limit(desired, dt));
+    const bool capturing = capture_->active();
+    output_->send(msg->header, desired, capturing, capturing ? "capturing" : "idle");
     if (!step.finished) return;
 
     // Answer this frame first: stitching takes a while and the base should not wait for it.
@@ -285,19 +283,10 @@ class PanoramaNodelet : public CheckedNodelet {
     if (last_outcome_ && !last_outcome_->success) {
       status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "last capture failed: %s",
                       last_outcome_->message.c_str());
-    } else if (dropped_since_report_ > 0) {
-      status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
-                      "%ld frames dropped since last report", dropped_since_report_);
     } else {
       status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
     }
-    dropped_since_report_ = 0;
     status.add("state", start_requested_ || capture_->active() ? "capturing" : "idle");
-    status.add("frames accepted", frames_accepted_);
-    long dropped = 0;
-    for (const auto& [kind, count] : dropped_) dropped += count;
-    status.add("frames dropped", dropped);
-    for (const auto& [kind, count] : dropped_) status.add("dropped: " + kind, count);
     status.add("captures stopped for lost frames or time", aborts_);
     status.add("last capture", last_outcome_ ? last_outcome_->message : "none");
   }
@@ -339,17 +328,10 @@ class PanoramaNodelet : public CheckedNodelet {
            std::to_string(static_cast<int>(expected)) + " px";
   }
 
-  void publish(const Twist2D& command) {
-    geometry_msgs::Twist msg;
-    msg.linear.x = command.linear;
-    msg.angular.z = command.angular;
-    cmd_pub_.publish(msg);
-  }
-
   std::mutex mutex_;
   std::condition_variable changed_;
   std::unique_ptr<PanoramaCapture> capture_;
-  std::unique_ptr<VelocityLimiter> limiter_;
+  std::unique_ptr<CommandOutput> output_;
   MatchOptions match_options_;
   StitchMethod method_ = StitchMethod::kAuto;
   TurningCamera camera_;
@@ -358,19 +340,15 @@ class PanoramaNodelet : public CheckedNodelet {
   double frame_timeout_ = 1.0;
   double capture_timeout_ = 120.0;
   double last_frame_wall_ = -1e9;
-  ros::Time last_stamp_;
   bool start_requested_ = false;
   std::optional<Outcome> outcome_;
   std::vector<cv::Mat> frames_;
   std::vector<double> yaws_;
   std::optional<Outcome> last_outcome_;
-  long frames_accepted_ = 0;
-  std::map<std::string, long> dropped_;  // by problemKind
-  long dropped_since_report_ = 0;
   long aborts_ = 0;
   std::unique_ptr<diagnostic_updater::Updater> updater_;
 
-  ros::Publisher cmd_pub_, panorama_pub_;
+  ros::Publisher panorama_pub_;
   ros::Subscriber camera_info_sub_, odom_sub_;
   image_transport::Subscriber image_sub_;
   ros::CallbackQueue service_queue_;
@@ -382,6 +360,6 @@ std::unique_ptr<nodelet::Nodelet> makePanoramaNodelet() {
   return std::make_unique<PanoramaNodelet>();
 }
 
-}  // namespace image_converter
+}  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(image_converter::PanoramaNodelet, nodelet::Nodelet)
+PLUGINLIB_EXPORT_CLASS(follow_bot::PanoramaNodelet, nodelet::Nodelet)
