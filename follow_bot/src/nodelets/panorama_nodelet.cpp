@@ -32,11 +32,10 @@
 #include "follow_bot/PanoramaConfig.h"
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
+#include "follow_bot/ros/params.h"
 #include "image_converter/panorama_capture.h"
 #include "image_converter/ros/checked_nodelet.h"
 #include "image_converter/ros/frame_msg.h"
-#include "image_converter/ros/params.h"
-#include "image_converter/ros/publish_last.h"
 #include "image_converter/stitching.h"
 
 namespace follow_bot {
@@ -46,7 +45,6 @@ using image_converter::guardedCallback;
 using image_converter::MatchOptions;
 using image_converter::PanoramaCapture;
 using image_converter::PanoramaCaptureConfig;
-using image_converter::param;
 using image_converter::StitchResult;
 using image_converter::TurningCamera;
 using image_converter::wrapAngle;
@@ -147,7 +145,6 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
     if (!(std::abs(camera_.pitch) < 1.5)) {
       throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
     }
-
   }
 
   // Every callback runs guarded: an exception drops the message, never the node.
