@@ -239,9 +239,14 @@ TEST_F(SignDetectorTest, StartupErrors) {
   SignDetectorConfig few_inliers = config();
   few_inliers.min_inliers = 3;
   EXPECT_NE(expectThrow(few_inliers).find("min_inliers must be >= 4"), std::string::npos);
+  // Only the alignment vouches for a tracked homography: a tracked frame is always aligned.
   SignDetectorConfig unaligned_tracking = config();
-  unaligned_tracking.refine_passes = 0;
-  EXPECT_NE(expectThrow(unaligned_tracking).find("track needs refine_passes >= 1"),
+  unaligned_tracking.track_refine_passes = 0;
+  EXPECT_NE(expectThrow(unaligned_tracking).find("track_refine_passes must be >= 1"),
+            std::string::npos);
+  SignDetectorConfig no_track_iterations = config();
+  no_track_iterations.track_refine_iterations = 0;
+  EXPECT_NE(expectThrow(no_track_iterations).find("track_refine_iterations must be >= 1"),
             std::string::npos);
   SignDetectorConfig far_motion = config();
   far_motion.max_track_motion_px = 0.0;

@@ -46,6 +46,10 @@ struct SignDetectorConfig {
   int track_window_px = 21;           // side of the Lucas-Kanade window (odd)
   int track_levels = 3;               // pyramid levels above full resolution
   double max_track_motion_px = 80.0;  // a corner of the sign moving further: lost, search again
+  // A tracked frame starts the alignment within a fraction of a pixel, so it needs fewer passes
+  // and iterations than a searched one (ECC is most of a frame's cost).
+  int track_refine_passes = 1;       // render-and-align passes on a tracked frame, all required
+  int track_refine_iterations = 10;  // ECC iteration limit per pass on a tracked frame
 };
 
 // Empty when the configuration is usable (the image itself is checked by the constructor),
@@ -92,16 +96,17 @@ class SignDetector : public MarkerDetector {
   // min_inliers or when the sign would appear mirrored.
   std::optional<Matches> fitHomography(const std::vector<cv::Point3f>& object,
                                        const std::vector<cv::Point2f>& image) const;
-  // The pose from matches: the homography aligned (every one of refine_passes required when
-  // `require_alignment`), IPPE, the reprojection gate. On success remembers the pose, the
-  // aligned homography and where to search next.
+  // The pose from matches: the homography aligned (refine_passes; for `tracked` matches
+  // track_refine_passes, every one required), IPPE, the reprojection gate. On success remembers the
+  // pose, the aligned homography and where to search next.
   std::optional<MarkerObservation> poseFrom(const cv::Mat& gray, const CameraGeometry& camera,
-                                            const Matches& matches, bool require_alignment);
+                                            const Matches& matches, bool tracked);
   // The sign's corners TL, TR, BR, BL on its plane, metres.
   std::vector<cv::Point2d> outlinePlane() const;
-  // One render-and-align pass on a sign-plane (metres) to image homography, in place; false (and
-  // the homography untouched) when ECC fails, correlates poorly or moves the corners too far.
-  bool refineHomography(const cv::Mat& gray, cv::Matx33d& plane_to_image) const;
+  // One render-and-align pass of at most `iterations` ECC steps on a sign-plane (metres) to image
+  // homography, in place; false (and the homography untouched) when ECC fails, correlates poorly
+  // or moves the corners too far.
+  bool refineHomography(const cv::Mat& gray, int iterations, cv::Matx33d& plane_to_image) const;
 
   SignDetectorConfig config_;
   double height_m_ = 0.0;

@@ -94,11 +94,11 @@ std::string validate(const SignDetectorConfig& config) {
            requireAtLeast("track_window_px", config.track_window_px, 5),
            requireAtLeast("track_levels", config.track_levels, 0),
            requirePositive("max_track_motion_px", config.max_track_motion_px),
+           requireAtLeast("track_refine_passes", config.track_refine_passes, 1),
+           requireAtLeast("track_refine_iterations", config.track_refine_iterations, 1),
        }) {
     if (!error.empty()) return error;
   }
-  // Only the alignment to the reference vouches for a tracked homography.
-  if (config.track && config.refine_passes < 1) return "track needs refine_passes >= 1";
   return "";
 }
 
@@ -132,7 +132,8 @@ SignDetector::SignDetector(const SignDetectorConfig& config) : config_(config) {
   reference_ = reference;
 }
 
-bool SignDetector::refineHomography(const cv::Mat& gray, cv::Matx33d& plane_to_image) const {
+bool SignDetector::refineHomography(const cv::Mat& gray, int iterations,
+                                    cv::Matx33d& plane_to_image) const {
   // Render the sign as the camera would see it under the current homography (area-sampled like
   // a sensor pixel), then align the camera image to that rendering with ECC. Aligning against a
   // picture with the same perspective and blur everywhere is what makes the refinement unbiased:
@@ -200,7 +201,7 @@ bool SignDetector::refineHomography(const cv::Mat& gray, cv::Matx33d& plane_to_i
     correlation =
         cv::findTransformECC(camera_view, rendered, warp, cv::MOTION_HOMOGRAPHY,
                              cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
-                                              config_.refine_iterations, kAlignEpsilon),
+                                              iterations, kAlignEpsilon),
                              mask, 5);
   } catch (const cv::Exception&) {
     return false;  // ECC did not converge
@@ -368,7 +369,7 @@ std::optional<MarkerObservation> SignDetector::detect(const cv::Mat& gray,
   std::optional<MarkerObservation> seen;
   if (!last_frame_.empty()) {
     if (const std::optional<Matches> tracked = trackInto(gray)) {
-      seen = poseFrom(gray, camera, *tracked, /*require_alignment=*/true);
+      seen = poseFrom(gray, camera, *tracked, /*tracked=*/true);
       last_tracked_ = seen.has_value();
     }
   }
@@ -379,7 +380,7 @@ std::optional<MarkerObservation> SignDetector::detect(const cv::Mat& gray,
     if (search_window_) matches = matchIn(gray, *search_window_ & whole, search_half_resolution_);
     if (!matches && search_window_ != whole) matches = matchIn(gray, whole, false);
     search_window_.reset();
-    if (matches) seen = poseFrom(gray, camera, *matches, /*require_alignment=*/false);
+    if (matches) seen = poseFrom(gray, camera, *matches, /*tracked=*/false);
   }
   if (seen && config_.track) {
     gray.copyTo(last_frame_);
@@ -391,8 +392,7 @@ std::optional<MarkerObservation> SignDetector::detect(const cv::Mat& gray,
 
 std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
                                                         const CameraGeometry& camera,
-                                                        const Matches& matches,
-                                                        bool require_alignment) {
+                                                        const Matches& matches, bool tracked) {
   const std::vector<cv::Point3f>& inlier_object = matches.object;
   const std::vector<cv::Point2f>& inlier_image = matches.image;
 
@@ -401,9 +401,12 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
   cv::Matx33d plane_to_image = matches.plane_to_image;
   std::vector<cv::Point3f> pose_object = inlier_object;
   std::vector<cv::Point2f> pose_image = inlier_image;
+  // Only the alignment to the reference vouches for a tracked homography.
+  const int wanted = tracked ? config_.track_refine_passes : config_.refine_passes;
+  const int iterations = tracked ? config_.track_refine_iterations : config_.refine_iterations;
   int passes = 0;
-  while (passes < config_.refine_passes && refineHomography(gray, plane_to_image)) ++passes;
-  if (require_alignment && passes < config_.refine_passes) return std::nullopt;
+  while (passes < wanted && refineHomography(gray, iterations, plane_to_image)) ++passes;
+  if (tracked && passes < wanted) return std::nullopt;
   if (passes > 0) {
     pose_object.clear();
     std::vector<cv::Point2f> grid;
