@@ -6,7 +6,8 @@ import subprocess
 
 import pytest
 
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.node_under_test import private_master
+from harness.run_scenario import free_port
 
 TOOLS = {
     "stitch": ["rosrun", "image_converter", "stitch"],
@@ -64,18 +65,10 @@ def test_bad_usage_exits_2_with_the_usage_on_stderr(tool, args, problem):
 
 
 def test_the_simulator_starts_without_warnings():
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    roscore = subprocess.Popen(
-        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
-    )
-    try:
-        assert wait_for_port(port, 20.0)
+    with private_master() as env:
         sim = subprocess.run(
             [*TOOLS["sim"], "_world:=course", "_lockstep:=false", "_duration:=0.5"],
             env=env, capture_output=True, text=True, timeout=60,
         )  # fmt: skip
-    finally:
-        stop(roscore)
     assert sim.returncode == 0, sim.stderr
     assert "Warning" not in sim.stderr and "WARN" not in sim.stdout + sim.stderr, sim.stderr

@@ -1,26 +1,20 @@
 """dynamic_reconfigure tells the truth: a rejected update leaves, and reports, the settings in
 force, and the next valid update is accepted. One round trip per node with a .cfg."""
 
-import os
 import subprocess
 import time
 
 import pytest
 import yaml
 
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.node_under_test import private_master
+from harness.run_scenario import stop
 
 
 @pytest.fixture(scope="module")
 def master_env():
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    roscore = subprocess.Popen(
-        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
-    )
-    assert wait_for_port(port, 20.0)
-    yield env
-    stop(roscore)
+    with private_master() as env:
+        yield env
 
 
 def dynparam(env, *args: str) -> subprocess.CompletedProcess:

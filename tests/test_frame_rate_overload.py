@@ -7,16 +7,14 @@ The ROS client runs in a child process (this file with --client)."""
 from __future__ import annotations
 
 import json
-import os
 import statistics
-import subprocess
 import sys
 import time
 
 import pytest
 
 from harness.fuzz import NODES, camera_info_msg, probe_frame
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.node_under_test import run_with_client
 
 RATE_HZ = 120.0
 SECONDS = 3.0
@@ -73,27 +71,12 @@ def client(key: str) -> None:
 def overload(request) -> tuple[str, dict]:
     key = request.param
     spec = NODES[key]
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    master = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL)
-    node = None
-    try:
-        assert wait_for_port(port, 20.0)
-        params = [f"_{k}:={v}" for k, v in spec.params.items()]
-        node = subprocess.Popen(
-            ["rosrun", spec.package, spec.executable, *params], env=env,
-            stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
-        )  # fmt: skip
-        done = subprocess.run(
-            [sys.executable, __file__, "--client", key],
-            env=env, capture_output=True, text=True, timeout=120,
-        )  # fmt: skip
-        assert node.poll() is None, f"{key} died (exit {node.returncode})"
-    finally:
-        stop(node)
-        stop(master)
-    assert done.returncode == 0, done.stdout + done.stderr
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    params = [f"_{k}:={v}" for k, v in spec.params.items()]
+    result = run_with_client(
+        [spec.package, spec.executable, *params],
+        [sys.executable, __file__, "--client", key],
+        timeout=120,
+    )
     print(key, result)
     return key, result
 

@@ -10,8 +10,6 @@ for the cmd_vel that status says went out). The child prints what it saw as JSON
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
 import threading
 import time
@@ -21,7 +19,7 @@ import pytest
 
 from harness.apriltag_image import tag_image
 from harness.fuzz import bgr_msg, camera_info_msg, floor, odom_msg, probe_frame
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.node_under_test import run_with_client
 
 RATE = 30.0
 MUX_TIMEOUT_S = 0.5  # an input silent this long loses the mux (twist_mux's usual timeout)
@@ -190,25 +188,7 @@ NODES = {
 
 
 def play(case: str) -> dict:
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    master = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL)
-    node = None
-    try:
-        assert wait_for_port(port, 20.0)
-        node = subprocess.Popen(
-            ["rosrun", *NODES[case]], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
-        )
-        done = subprocess.run(
-            [sys.executable, __file__, "--client", case], env=env, capture_output=True,
-            text=True, timeout=180,
-        )  # fmt: skip
-        assert node.poll() is None, f"{case}: node died (exit {node.returncode})"
-    finally:
-        stop(node)
-        stop(master)
-    assert done.returncode == 0, done.stdout + done.stderr
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return run_with_client(NODES[case], [sys.executable, __file__, "--client", case], timeout=180)
 
 
 def sent_commands(result: dict, start: int = 0) -> list[tuple[float, float]]:

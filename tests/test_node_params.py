@@ -4,24 +4,18 @@ A value of the wrong type is never silently replaced by the default: the error n
 the expected type and its range.
 """
 
-import os
 import subprocess
 
 import pytest
 
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.node_under_test import private_master
+from harness.run_scenario import stop
 
 
 @pytest.fixture(scope="module")
 def master_env():
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    roscore = subprocess.Popen(
-        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
-    )
-    assert wait_for_port(port, 20.0)
-    yield env
-    stop(roscore)
+    with private_master() as env:
+        yield env
 
 
 @pytest.mark.parametrize(

@@ -8,8 +8,6 @@ The ROS client runs in a child process (this file with --client)."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
 import threading
 import time
@@ -17,7 +15,7 @@ import time
 import pytest
 
 from harness.fuzz import camera_info_msg, image_msg, odom_msg, probe_frame
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.node_under_test import run_with_client
 
 FRAME_TIMEOUT_S = 1.0  # the node's ~frame_timeout default (follow_bot/README.md)
 STOP_WITHIN_S = 0.2  # issue 12: a zero Twist within 0.2 s when frames stop
@@ -103,26 +101,9 @@ def client() -> None:
 
 @pytest.fixture(scope="module")
 def result() -> dict:
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    master = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL)
-    node = None
-    try:
-        assert wait_for_port(port, 20.0)
-        node = subprocess.Popen(
-            ["rosrun", "follow_bot", "panorama"], env=env, stdout=subprocess.DEVNULL,
-            stderr=subprocess.STDOUT,
-        )  # fmt: skip
-        done = subprocess.run(
-            [sys.executable, __file__, "--client"], env=env, capture_output=True, text=True,
-            timeout=120,
-        )  # fmt: skip
-        assert node.poll() is None, f"panorama died (exit {node.returncode})"
-    finally:
-        stop(node)
-        stop(master)
-    assert done.returncode == 0, done.stdout + done.stderr
-    out = json.loads(done.stdout.strip().splitlines()[-1])
+    out = run_with_client(
+        ["follow_bot", "panorama"], [sys.executable, __file__, "--client"], timeout=120
+    )
     print(out)
     return out
 

@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import subprocess
 import sys
 import time
 
@@ -23,7 +21,7 @@ import numpy as np
 import pytest
 
 from harness.fuzz import NODES, bgr_msg, camera_info_msg, image_msg, probe_frame
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.node_under_test import run_with_client
 
 RATE_HZ = 30.0
 BEHAVIOURS = ["follower", "beacon_follow", "beacon_approach", "parker_tag", "parker_sign"]
@@ -159,28 +157,13 @@ def client(key: str) -> None:
 def faults(request) -> tuple[str, dict]:
     key = request.param
     spec = NODES[key]
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    master = subprocess.Popen(["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL)
-    node = None
-    try:
-        assert wait_for_port(port, 20.0)
-        subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
-        params = [f"_{k}:={v}" for k, v in spec.params.items()]
-        node = subprocess.Popen(
-            ["rosrun", spec.package, spec.executable, *params], env=env,
-            stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
-        )  # fmt: skip
-        done = subprocess.run(
-            [sys.executable, __file__, "--client", key],
-            env=env, capture_output=True, text=True, timeout=120,
-        )  # fmt: skip
-        assert node.poll() is None, f"{key} died (exit {node.returncode})"
-    finally:
-        stop(node)
-        stop(master)
-    assert done.returncode == 0, done.stdout + done.stderr
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    params = [f"_{k}:={v}" for k, v in spec.params.items()]
+    result = run_with_client(
+        [spec.package, spec.executable, *params],
+        [sys.executable, __file__, "--client", key],
+        timeout=120,
+        sim_time=True,
+    )
     print(key, json.dumps(result))
     return key, result
 
