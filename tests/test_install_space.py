@@ -3,9 +3,9 @@ ROS_PACKAGE_PATH, no $FOLLOW_BOT_VENV), the installed simulator finds the projec
 harness's env hook) and the worlds (the installed `worlds` package, through rospkg), and the
 installed launch files find the sign image through `$(find worlds)`.
 
-test_installed_sim_drives (make test, ~40 s): colcon installs `worlds` and `harness` into a tmp
-prefix; the installed sim plays 1 s of lockstep sim time on the course against the installed
-constant_twist.
+test_installed_sim_drives (make test, ~40 s): colcon installs `worlds`, `follow_bot_msgs` (the
+status the sim waits for) and `harness` into a tmp prefix; the installed sim plays 1 s of lockstep
+sim time on the course against the installed constant_twist.
 test_installed_launch_files (marked full, make test-full only: colcon builds every package, several
 minutes): course.launch (lockstep) drives and ends on a zero Twist; park.launch starts with the tag
 and with the sign.
@@ -68,7 +68,7 @@ def start_master(env: dict, port: int) -> subprocess.Popen:
 
 @pytest.mark.skipif(shutil.which("colcon") is None, reason="colcon is in tools/debian-packages.txt")
 def test_installed_sim_drives(tmp_path):
-    install = colcon_install(tmp_path, ["worlds", "harness"])
+    install = colcon_install(tmp_path, ["worlds", "follow_bot_msgs", "harness"])
     port = free_port()
     env = installed_env(install, tmp_path, port)
     worlds = subprocess.run(["rospack", "find", "worlds"], env=env, capture_output=True, text=True)
@@ -128,7 +128,7 @@ def drive_then_ctrl_c(env: dict, launch_args: list[str], drove) -> tuple[str, li
 @pytest.mark.full
 @pytest.mark.skipif(shutil.which("colcon") is None, reason="colcon is in tools/debian-packages.txt")
 def test_installed_launch_files(tmp_path):
-    install = colcon_install(tmp_path, ["worlds", "harness", "image_converter", "follow_bot"])
+    install = colcon_install(tmp_path, ["worlds", "follow_bot_msgs", "harness", "image_converter", "follow_bot"])
     port = free_port()
     env = installed_env(install, tmp_path, port)
     roscore = start_master(env, port)
