@@ -5,6 +5,10 @@
 - /clock and frames stop together (the simulator died): one zero Twist within 0.3 s of wall
   time (the steady-clock watchdog), nothing after.
 
+A frame is answered by the node's ~status (stamped with the frame's stamp) and, when that says a
+command was sent, by its Twist. The panorama steers only while capturing: the client keeps a
+~capture call running (restarted after each outage, which ends the capture by its lost-frame rule).
+
 The ROS client runs in a child process (this file with --client), so the test process never
 initialises rospy and every node gets a master of its own.
 """
@@ -14,26 +18,36 @@ from __future__ import annotations
 import json
 import math
 import sys
+import threading
 import time
 
 import cv2
 import numpy as np
 import pytest
 
-from harness.fuzz import NODES, bgr_msg, camera_info_msg, image_msg, probe_frame
+from harness.fuzz import NODES, bgr_msg, camera_info_msg, image_msg, odom_msg, probe_frame
 from harness.node_under_test import run_with_client
 
 RATE_HZ = 30.0
-BEHAVIOURS = ["follower", "beacon_follow", "beacon_approach", "parker_tag", "parker_sign"]
+BEHAVIOURS = [
+    "follower", "beacon_follow", "beacon_approach", "parker_tag", "parker_sign",
+    "panorama_capturing",
+]  # fmt: skip
 
 
 def client(key: str) -> None:
     import rospy
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import Twist
+    from nav_msgs.msg import Odometry
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import CameraInfo, Image
+    from std_srvs.srv import Trigger
 
+    from follow_bot_msgs.msg import BehaviourStatus
+
+    spec = NODES[key]
+    node = f"/{spec.executable}"
     rospy.init_node("fault_client", disable_signals=True)
     clock_pub = rospy.Publisher("/clock", Clock, queue_size=1, tcp_nodelay=True)
     image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1, tcp_nodelay=True)
@@ -57,6 +71,15 @@ def client(key: str) -> None:
         tcp_nodelay=True,
     )  # fmt: skip
 
+    answers: dict[int, object] = {}  # frame stamp (ns) -> its ~status
+    rospy.Subscriber(
+        f"{node}/status", BehaviourStatus,
+        lambda s: answers.__setitem__(s.header.stamp.to_nsec(), s), tcp_nodelay=True,
+    )  # fmt: skip
+    if spec.capturing:  # the panorama captures only with a pose
+        odom_pub = rospy.Publisher("/odom", Odometry, queue_size=1, latch=True)
+        odom_pub.publish(odom_msg(0.0))
+
     size = [(640, 480)]
     frames = {}
 
@@ -67,42 +90,75 @@ def client(key: str) -> None:
             frames[(width, height)] = bgr_msg(cv2.resize(image, (width, height)))
         return frames[(width, height)]
 
-    def tick(frame: bool) -> None:
+    def tick(frame: bool):
+        """One 1/30 s step of sim time; with a frame, its ~status (None when unanswered)."""
+        answer = None
         clock = Clock()
         clock.clock = rospy.Time.from_sec(sim_time[0])
         clock_pub.publish(clock)
         published[0] = sim_time[0]
         info_pub.publish(camera_info_msg())
         if frame:
-            # Lockstep, as the simulator: the next tick waits for this frame's answer.
-            answered = len(twists)
+            # Lockstep, as the simulator: the next tick waits for this frame's answer, and for
+            # its Twist when the answer says one went out.
+            twists_before = len(twists)
             msg = frame_of(*size[0])
             msg.header.stamp = clock.clock
             image_pub.publish(msg)
             deadline = time.monotonic() + 2.0
-            while len(twists) == answered and time.monotonic() < deadline:
+            while time.monotonic() < deadline:
+                answer = answers.get(clock.clock.to_nsec())
+                if answer is not None and (not answer.command_sent or len(twists) > twists_before):
+                    break
                 time.sleep(0.002)
             last_frame.update(wall=time.monotonic(), sim=sim_time[0])
         else:
             time.sleep(1.0 / RATE_HZ)
         sim_time[0] += 1.0 / RATE_HZ
+        return answer
 
     deadline = time.monotonic() + 30
     while image_pub.get_num_connections() == 0 and time.monotonic() < deadline:
         time.sleep(0.05)
 
-    sent = [0]
+    capture_replies: list[str] = []  # the panorama's ~capture answers, one per ended capture
+
+    def start_capture() -> None:
+        """Panorama: a ~capture call from a thread (it blocks until the capture ends), once the
+        previous one has ended; frames flow until the answers say it steers."""
+        if not spec.capturing:
+            return
+        service = f"{node}/capture"
+        rospy.wait_for_service(service, timeout=30)
+        deadline = time.monotonic() + 5.0
+        while len(capture_replies) < started[0] and time.monotonic() < deadline:
+            time.sleep(0.01)
+        started[0] += 1
+        tick(True)  # a capture starts only with frames arriving
+        threading.Thread(
+            target=lambda: capture_replies.append(rospy.ServiceProxy(service, Trigger)().message),
+            daemon=True,
+        ).start()
+        for _ in range(round(2 * RATE_HZ)):
+            answer = tick(True)
+            if answer is not None and answer.active:
+                return
+
+    started = [0]
+    counts = {"frames": 0, "answers": 0, "commands": 0}
 
     def run(seconds: float, frames: bool, clock: bool = True) -> tuple[float, list]:
-        """Ticks for `seconds` of sim time (frames: in lockstep), or of wall time without the
-        clock; returns the wall start and the Twists in it."""
+        """Ticks for `seconds` of sim time (frames: in lockstep, counted in `counts`), or of wall
+        time without the clock; returns the wall start and the Twists in it."""
         start = len(twists)
-        sent[0] = 0
+        counts.update(frames=0, answers=0, commands=0)
         t0 = time.monotonic()
         for _ in range(round(seconds * RATE_HZ)):
             if clock:
-                tick(frames)
-                sent[0] += frames
+                answer = tick(frames)
+                counts["frames"] += frames
+                counts["answers"] += answer is not None
+                counts["commands"] += answer is not None and answer.command_sent
             else:
                 time.sleep(1.0 / RATE_HZ)
         return t0, twists[start:]
@@ -124,32 +180,39 @@ def client(key: str) -> None:
         }
 
     result = {}
+    start_capture()
     _, driving = run(1.5, frames=True)
-    result["driving_twists"], result["driving_frames"] = len(driving), sent[0]
+    result["driving_twists"], result["driving_frames"] = len(driving), counts["frames"]
+    result["driving_answers"], result["driving_commands"] = counts["answers"], counts["commands"]
     for _ in range(3):  # dropped by the checks (an odd mono16 step), counted in the diagnostics
         image_pub.publish(image_msg(8, 4, "mono16", 17, bytes(68), (1000, 0)))
         time.sleep(0.03)  # the input queue holds one frame
         tick(True)
     result["frames_stop"] = outage(clock=True)
+    start_capture()
     sim_time[0] -= 100.0  # /clock jumps back
     _, after_jump = run(1.0, frames=True)
     result["after_jump_twists"] = len(after_jump)
-    result["after_jump_frames"] = sent[0]
+    result["after_jump_frames"] = counts["frames"]
+    result["after_jump_answers"] = counts["answers"]
     result["after_jump_stop"] = outage(clock=True)
+    start_capture()
     run(1.0, frames=True)
     result["clock_and_frames_stop"] = outage(clock=False)
+    start_capture()
     for width, height in [(320, 240), (1280, 720), (640, 480)]:  # resolution changes mid-run
         size[0] = (width, height)
-        _, answers = run(1.0, frames=True)
+        _, commands = run(1.0, frames=True)
         result[f"resolution_{width}x{height}"] = {
-            "frames": sent[0],
-            "twists": len(answers),
-            "sane": all(abs(v) <= 0.7 and abs(w) <= math.pi for _, _, v, w in answers),
+            **counts,
+            "twists": len(commands),
+            "sane": all(abs(v) <= 0.7 and abs(w) <= math.pi for _, _, v, w in commands),
         }
     run(1.5, frames=True)  # a second of sim time: the next periodic report
     result["diagnostics_last"] = statuses[-1] if statuses else None
     wall_stops = [s for s in statuses if s.get("last watchdog stop clock") == "wall"]
     result["diagnostics_wall_stop"] = wall_stops[0] if wall_stops else None
+    result["capture_replies"] = capture_replies
     print(json.dumps(result))
 
 
@@ -170,6 +233,8 @@ def faults(request) -> tuple[str, dict]:
 
 def test_answers_while_frames_flow(faults):
     key, r = faults
+    assert r["driving_answers"] >= 0.9 * r["driving_frames"], r
+    assert r["driving_commands"] == r["driving_answers"], r  # each one steered
     assert r["driving_twists"] >= 0.9 * r["driving_frames"], r
 
 
@@ -184,6 +249,7 @@ def test_frames_stop_one_zero_within_0_2_s_and_nothing_after(faults, phase):
 
 def test_clock_jump_back_keeps_answering(faults):
     key, r = faults
+    assert r["after_jump_answers"] >= 0.9 * r["after_jump_frames"], r
     assert r["after_jump_twists"] >= 0.9 * r["after_jump_frames"], r
 
 
@@ -198,6 +264,7 @@ def test_clock_and_frames_stop_together_stop_within_0_3_s_wall(faults):
 def test_resolution_change_mid_run_every_frame_answered_within_limits(faults, resolution):
     key, r = faults
     o = r[f"resolution_{resolution}"]
+    assert o["answers"] >= 0.9 * o["frames"] and o["commands"] == o["answers"], o
     assert o["twists"] >= 0.9 * o["frames"] and o["sane"], o
 
 
@@ -211,6 +278,14 @@ def test_diagnostics_tell_why_the_robot_stopped(faults):
     # The report forced at the /clock-and-frames outage: an error naming the wall clock.
     assert wall_stop is not None and wall_stop["level"] == 2, wall_stop
     assert "stopped by the watchdog" in wall_stop["message"], wall_stop
+
+
+def test_panorama_each_outage_ends_its_capture(faults):
+    key, r = faults
+    if not NODES[key].capturing:
+        pytest.skip("only the panorama runs a capture")
+    # Frames stop for 1.2 s, beyond ~frame_timeout (1 s): the call answers why, three times.
+    assert r["capture_replies"] == ["camera frames stopped during the capture"] * 3, r
 
 
 if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
