@@ -8,8 +8,8 @@ Lockstep (default): publish frame k, wait for the one status the behaviour answe
 ~reply_timeout wall seconds; a miss is counted), apply the command it says it sent on cmd_vel
 (none sent: the behaviour is quiet, its last command was a zero, the robot stands),
 integrate one step, repeat: runs are repeatable and as fast as the behaviour. Steps without a
-frame (camera dropout) apply what arrives on /cmd_vel (the watchdog's stop). Real-time
-(~lockstep false): frames at ~rate_hz of wall clock, the latest /cmd_vel applied.
+frame (camera dropout) pass at wall pace and apply what arrives on /cmd_vel (the watchdog's
+stop). Real-time (~lockstep false): frames at ~rate_hz of wall clock, the latest /cmd_vel applied.
 
 Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and perturbations) or
 ~world (a world YAML or name), ~rate_hz (30), ~duration (s, 0 = forever), ~lockstep (true),
@@ -46,10 +46,6 @@ from harness.scenario import ScenarioError, load_scenario
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
 from harness.world import WorldError, load_world, resolve_world_path
-
-# Sim time spent per wall-clock wait while frames are withheld (camera dropout), so that the
-# behaviour's watchdog timers can fire and answer before the next step.
-DROPOUT_WALL_WAIT = 0.01
 
 
 def camera_info_msg(info: dict) -> CameraInfo:
@@ -255,7 +251,10 @@ class SimNode:
                     if frame:
                         missed = not self.inbox.wait(self.reply_timeout)
                     else:
-                        time.sleep(DROPOUT_WALL_WAIT)
+                        # Frames withheld (camera dropout): sim time passes at wall pace, as on a
+                        # robot, so the behaviour's watchdog timers fire on time even when the
+                        # machine is loaded (faster pacing starved them and delayed the stop).
+                        time.sleep(period)
                 else:
                     next_wall += period
                     time.sleep(max(0.0, next_wall - time.monotonic()))
