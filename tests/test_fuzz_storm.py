@@ -17,23 +17,27 @@ SEED = 7
 
 
 @pytest.fixture(scope="module")
-def results(tmp_path_factory, pytestconfig) -> dict[str, dict]:
+def storm(tmp_path_factory) -> tuple[str, dict[str, dict]]:
+    """The storm's printed per-node counts and its results by node."""
     out = tmp_path_factory.mktemp("storm")
     done = subprocess.run(
         [sys.executable, "-m", "harness.fuzz", "--messages", str(MESSAGES), "--seed", str(SEED),
          "--json", str(out / "storm.json"), "--logs", str(out / "logs")],
         capture_output=True, text=True, timeout=900,
     )  # fmt: skip
-    capture = pytestconfig.pluginmanager.getplugin("capturemanager")
-    with capture.global_and_fixture_disabled():
-        print("\n" + done.stdout)
     assert (out / "storm.json").exists(), done.stdout + done.stderr
-    return {r["node"]: r for r in json.loads((out / "storm.json").read_text())}
+    return done.stdout, {r["node"]: r for r in json.loads((out / "storm.json").read_text())}
+
+
+def test_storm_reaches_every_node_and_prints_the_counts(storm, record_property):
+    table, results = storm
+    record_property("summary", table)  # shown in the closing summary (tests/conftest.py)
+    assert set(results) == set(NODES)
 
 
 @pytest.mark.parametrize("node", list(NODES))
-def test_storm_leaves_the_node_alive_correct_and_its_twists_sane(results, node):
-    r = results[node]
+def test_storm_leaves_the_node_alive_correct_and_its_twists_sane(storm, node):
+    r = storm[1][node]
     assert r["messages"] >= MESSAGES
     assert r["alive"], f"{node} died (exit code {r['exit_code']})"
     assert r["probe"] == "ok"

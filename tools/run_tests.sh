@@ -23,8 +23,12 @@ fi
 # FULL=1 (make test-full) also plays the scenario runs marked `full` (tests/test_scenarios.py).
 select=(-m "not full")
 [ "${FULL:-0}" = 1 ] && select=()
-echo "== pytest ${select[*]}"
-"$venv/bin/python3" -m pytest -q "${select[@]}" harness/test tests --junitxml="$build/test_results/pytest.xml"
+# One pytest-xdist worker per core, a whole file per worker: a file's module and session
+# fixtures (one run_scenario call for all the scenario runs, one fuzz storm) run once.
+workers=(-n "$(nproc)" --dist loadfile)
+echo "== pytest ${select[*]} ${workers[*]}"
+"$venv/bin/python3" -m pytest -q "${select[@]}" "${workers[@]}" harness/test tests \
+  --junitxml="$build/test_results/pytest.xml"
 rc=$?
 if [ $rc -ne 0 ] && [ $rc -ne 1 ]; then  # 1 = some tests failed, counted from the XML below
   echo "pytest broke (exit $rc)"
