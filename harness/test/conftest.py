@@ -9,15 +9,13 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 if str(SRC) not in sys.path:
     sys.path.insert(0, str(SRC))
 
-from harness.world import World, load_world  # noqa: E402
-
-WORLDS = Path(__file__).resolve().parents[2] / "worlds"
+from harness.world import WORLDS_DIR, World, load_world  # noqa: E402
 
 
 @pytest.fixture(scope="session")
 def worlds() -> dict[str, World]:
     """The shipped worlds, loaded once."""
     return {
-        name: load_world(WORLDS / f"{name}.yaml")
+        name: load_world(WORLDS_DIR / f"{name}.yaml")
         for name in ("course", "rgb", "dumpster", "parking", "parking_sign")
     }

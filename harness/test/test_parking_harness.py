@@ -3,19 +3,19 @@ two-tag parking world, and the time from which a run stays still."""
 
 import numpy as np
 import pytest
-from conftest import WORLDS
 
 from harness.apriltag_image import detect
 from harness.scenario import ScenarioError, parse_scenario
 from harness.scoring import still_since
 from harness.simulation import Perturbations, Simulation
-from harness.world import load_world
+from harness.world import WORLDS_DIR, load_world
 
 BASE = {"world": "parking", "driver": {"constant": [0.0, 0.0]}, "duration": 1.0}
 
 
 def test_hide_parses_object_and_window():
-    scenario = parse_scenario({**BASE, "perturbations": {"hide": [["goal_tag", 1.0, 2.0]]}}, WORLDS)
+    hide = {"hide": [["goal_tag", 1.0, 2.0]]}
+    scenario = parse_scenario({**BASE, "perturbations": hide}, WORLDS_DIR)
     assert scenario.perturbations.hidden == (("goal_tag", 1.0, 2.0),)
 
 
@@ -29,7 +29,7 @@ def test_hide_parses_object_and_window():
 )
 def test_malformed_hide_names_the_field(hide, words):
     with pytest.raises(ScenarioError, match=r"perturbations\.hide") as error:
-        parse_scenario({**BASE, "perturbations": {"hide": hide}}, WORLDS)
+        parse_scenario({**BASE, "perturbations": {"hide": hide}}, WORLDS_DIR)
     assert words in str(error.value)
 
 
@@ -50,7 +50,7 @@ def test_hiding_an_unknown_object_is_an_error(worlds):
 
 
 def test_two_tag_world_shows_both_ids_from_the_start():
-    world = load_world(WORLDS / "parking_two_tags.yaml")
+    world = load_world(WORLDS_DIR / "parking_two_tags.yaml")
     sim = Simulation(world, start=(1.2, 0.0, 0.0))
     ids = sorted(d.tag_id for d in detect(sim.render()[..., 1]))
     assert ids == [0, 5]

@@ -5,12 +5,12 @@ import re
 
 import numpy as np
 import pytest
-from conftest import WORLDS
 
 from harness.report import distributions, markdown, summarise, wilson_interval, worst, write_summary
 from harness.scenario import ScenarioError, load_scenarios
 from harness.sweep import Distribution, draw, member_name, member_seed, parse_sweep
 from harness.validation import ValidationError
+from harness.world import WORLDS_DIR
 
 FAMILY = """
 base: {world: parking, driver: {constant: [0.2, 0.0]}, duration: 2.0, start: {from: goal_tag}}
@@ -64,13 +64,13 @@ def test_sweep_members_are_named_seeded_and_replayable(tmp_path):
 
 
 def test_the_shipped_sweep_draws_its_documented_ranges():
-    runs = load_scenarios(WORLDS / "sweeps" / "parker_tag_sweep.yaml")
+    runs = load_scenarios(WORLDS_DIR / "sweeps" / "parker_tag_sweep.yaml")
     assert len(runs) == 200 and runs[0].name.startswith("parker_tag_sweep/000_seed")
     d = np.array([[s.parameters[f"start.{k}"] for k in ("distance", "off_deg", "bearing_deg")]
                   for s in runs])  # fmt: skip
     assert np.all(d.min(axis=0) >= [0.8, -45, -60]) and np.all(d.max(axis=0) <= [3.0, 45, 60])
     assert np.all(d.min(axis=0) < [0.85, -42, -56]) and np.all(d.max(axis=0) > [2.95, 42, 56])
-    family_criteria = load_scenarios(WORLDS / "scenarios" / "parker_tag.yaml")[0].criteria
+    family_criteria = load_scenarios(WORLDS_DIR / "scenarios" / "parker_tag.yaml")[0].criteria
     assert all(s.criteria == family_criteria for s in runs)  # extends: the family's criteria
 
 
