@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -85,6 +87,22 @@ TEST(PanoramaCapture, RejectsUnusableConfigurations) {
   config = PanoramaCaptureConfig();
   config.yaw_tolerance = 0.5;
   EXPECT_NE(validate(config).find("yaw_tolerance"), std::string::npos);
+}
+
+TEST(YawOfQuaternion, ReadsUnitQuaternionsAndRejectsTheRest) {
+  EXPECT_NEAR(yawOfQuaternion(0.0, 0.0, std::sin(0.4), std::cos(0.4)), 0.8, 1e-12);
+  EXPECT_NEAR(yawOfQuaternion(0.0, 0.0, 1.0, 0.0), kPi, 1e-12);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  // Each of these gave a finite heading from atan2 alone (pi for the first).
+  for (const auto& q : {std::array<double, 4>{0.0, 0.0, 1e300, 0.0},
+                        {0.0, 0.0, 0.0, 0.0},
+                        {0.0, 0.0, 0.0, 2.0},
+                        {nan, 0.0, 0.0, 1.0},
+                        {0.0, 0.0, inf, inf}}) {
+    EXPECT_TRUE(std::isnan(yawOfQuaternion(q[0], q[1], q[2], q[3])))
+        << q[0] << " " << q[1] << " " << q[2] << " " << q[3];
+  }
 }
 
 }  // namespace

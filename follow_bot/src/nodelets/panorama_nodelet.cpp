@@ -65,7 +65,7 @@ void requireLinked(bool ok, const std::string& rule, double a, double b) {
 
 double yawOf(const nav_msgs::Odometry& odom) {
   const geometry_msgs::Quaternion& q = odom.pose.pose.orientation;
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  return image_converter::yawOfQuaternion(q.x, q.y, q.z, q.w);
 }
 
 }  // namespace
@@ -174,8 +174,12 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
 
   void handleOdom(const nav_msgs::OdometryConstPtr& odom) {
     const double yaw = yawOf(*odom);
+    if (!std::isfinite(yaw)) {
+      NODELET_ERROR_THROTTLE(5.0, "ignoring odometry: its orientation is not a unit quaternion");
+      return;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
-    if (std::isfinite(yaw)) yaw_ = yaw;
+    yaw_ = yaw;
   }
 
   bool onCapture(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {

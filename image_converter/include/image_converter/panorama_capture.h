@@ -25,6 +25,11 @@ std::string validate(const PanoramaCaptureConfig& config);
 // Angle wrapped into (-pi, pi].
 double wrapAngle(double angle);
 
+// The heading (rotation about z, rad) of an orientation quaternion; NaN unless it is a unit
+// quaternion (norm within 1e-3 of 1). A garbage or uninitialised pose still gives a finite
+// atan2, which would be a wrong heading.
+double yawOfQuaternion(double x, double y, double z, double w);
+
 class PanoramaCapture {
  public:
   // What to do with the current frame.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace image_converter {
@@ -33,6 +34,12 @@ std::string validate(const PanoramaCaptureConfig& config) {
 double wrapAngle(double angle) {
   const double wrapped = std::remainder(angle, 2.0 * kPi);
   return wrapped <= -kPi ? wrapped + 2.0 * kPi : wrapped;
+}
+
+double yawOfQuaternion(double x, double y, double z, double w) {
+  const double norm2 = x * x + y * y + z * z + w * w;
+  if (!(std::abs(norm2 - 1.0) < 2e-3)) return std::numeric_limits<double>::quiet_NaN();
+  return std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
 }
 
 PanoramaCapture::PanoramaCapture(const PanoramaCaptureConfig& config) : config_(config) {
