@@ -98,3 +98,18 @@ def test_parallel_runs_equal_serial_runs(tmp_path):
             serial_metrics.pop(wall_clock), parallel_metrics.pop(wall_clock)
         assert serial_metrics == parallel_metrics, name
     assert results[1]["parker_short"][1]["commands"]["max_abs_v"] > 0  # the parker drove
+
+
+def test_stop_when_still_ends_the_run_after_three_still_seconds(tmp_path):
+    """`stop_when: still` (sweeps of parking behaviours): a robot commanded still from the
+    start ends its 20 s run once the last 3 s of commands were zero, a frame after 3 s."""
+    still = tmp_path / "still.yaml"
+    still.write_text(
+        "name: still\nworld: course\ndriver: {constant: [0.0, 0.0]}\nduration: 20.0\n"
+        "stop_when: still\n"
+    )
+    command = ["rosrun", "harness", "run_scenario", str(still), "--out", str(tmp_path)]
+    subprocess.run(command, check=True, timeout=300, stdout=subprocess.DEVNULL)
+    metrics = json.loads((tmp_path / "still" / "result.json").read_text())["metrics"]
+    assert metrics["sim_time"] == pytest.approx(3.0 + 1 / 30, abs=1e-6)
+    assert metrics["steps"] == 91

@@ -70,8 +70,21 @@ def test_the_shipped_sweep_draws_its_documented_ranges():
                   for s in runs])  # fmt: skip
     assert np.all(d.min(axis=0) >= [0.8, -45, -60]) and np.all(d.max(axis=0) <= [3.0, 45, 60])
     assert np.all(d.min(axis=0) < [0.85, -42, -56]) and np.all(d.max(axis=0) > [2.95, 42, 56])
-    family_criteria = load_scenarios(WORLDS_DIR / "scenarios" / "parker_tag.yaml")[0].criteria
-    assert all(s.criteria == family_criteria for s in runs)  # extends: the family's criteria
+    family = load_scenarios(WORLDS_DIR / "scenarios" / "parker_tag.yaml")[0]
+    assert all(s.world_path == family.world_path and s.behaviour == family.behaviour for s in runs)
+    # Judged by the parker's spec (1 cm / 1 deg, parked), the runner's command limits as usual.
+    spec = {
+        "parking.standoff_error": (-0.01, 0.01),
+        "parking.lateral": (-0.01, 0.01),
+        "parking.heading_error_deg": (-1.0, 1.0),
+        "parking.still_since": (None, 38.0),
+    }
+    for s in runs:
+        bounds = {c.metric: (c.minimum, c.maximum) for c in s.criteria}
+        assert {m: bounds[m] for m in spec} == spec
+        family_rest = {c for c in family.criteria if c.metric not in spec}
+        assert family_rest <= set(s.criteria)
+        assert (s.duration, s.stop_when) == (40.0, "still")
 
 
 def test_distribution_shapes():

@@ -38,7 +38,7 @@ from harness.validation import (
 )
 from harness.world import Box, Sphere, World, WorldError, load_world, resolve_world_path
 
-STOP_CONDITIONS = ("duration", "lap_complete")
+STOP_CONDITIONS = ("duration", "lap_complete", "still")
 
 
 class ScenarioError(ValidationError):

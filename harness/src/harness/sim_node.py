@@ -47,6 +47,10 @@ from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
 from harness.world import WorldError, load_world, resolve_world_path
 
+# `stop_when: still` ends a run after this long without motion: longer than a behaviour's hold
+# while its target is briefly lost (the parker holds 2 s, then searches), so a pause is not an end.
+STILL_STOP_S = 3.0
+
 
 def camera_info_msg(info: dict) -> CameraInfo:
     msg = CameraInfo()
@@ -125,6 +129,7 @@ class SimNode:
             self.lockstep, self.reply_timeout = scenario.lockstep, scenario.reply_timeout
             start, perturbations = scenario.start, scenario.perturbations
             self.stop_at_lap = scenario.stop_when == "lap_complete"
+            self.stop_when_still = scenario.stop_when == "still"
         else:
             world = load_world(resolve_world_path(rospy.get_param("~world", "course")))
             self.rate_hz = float(rospy.get_param("~rate_hz", 30.0))
@@ -132,6 +137,7 @@ class SimNode:
             self.lockstep = bool(rospy.get_param("~lockstep", True))
             self.reply_timeout = float(rospy.get_param("~reply_timeout", 2.0))
             start, perturbations, self.stop_at_lap = None, Perturbations(), False
+            self.stop_when_still = False
         if self.duration < 0 or not math.isfinite(self.duration):
             raise ValueError(f"~duration must be >= 0 s, got {self.duration}")
         self.sim = Simulation(world, rate_hz=self.rate_hz, start=start, perturbations=perturbations)
@@ -218,11 +224,22 @@ class SimNode:
     def _finished(self) -> bool:
         if self.duration and self.sim.time >= self.duration - 1e-9:
             return True
+        if self.stop_when_still and self._still_for(STILL_STOP_S):
+            return True
         if self.laps is not None and self.sim.step_index % 15 == 0 and self.sim.record.pose:
             recent = np.asarray(self.sim.record.pose[-15:])[:, :2]
             self.laps.add(recent)
             return self.laps.lap_complete
         return False
+
+    def _still_for(self, seconds: float) -> bool:
+        """Every command of the last `seconds` of sim time was zero."""
+        record = self.sim.record
+        steps = int(math.ceil(seconds * self.rate_hz))
+        if len(record.t) <= steps:
+            return False
+        recent = zip(record.v[-steps:], record.w[-steps:], strict=True)
+        return all(v == 0.0 and w == 0.0 for v, w in recent)
 
     # -- loops ------------------------------------------------------------------------------
 
