@@ -31,7 +31,8 @@ struct ScriptedFrame {
   double stamp = 0.0;
 };
 
-// A found band (pixel_count >= 30, the default min_pixels) of a 640x480 frame.
+// The 20-row band of a 640x480 frame around `row`, seeing the line at `column`; found when
+// pixel_count reaches the default min_pixels (30).
 BandMeasurement scriptedBand(double column, double row, int pixel_count = 400,
                              double confidence = 1.0) {
   BandMeasurement band;
