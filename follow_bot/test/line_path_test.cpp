@@ -189,9 +189,9 @@ LineMeasurement bandMeasurement(std::optional<double> column) {
   return m;
 }
 
-LinePathConfig atSpeed(double speed) {
-  LinePathConfig config;
-  config.speed = speed;
+SteeringConfig atSpeed(double speed) {
+  SteeringConfig config;
+  config.max_linear = speed;
   return config;
 }
 
@@ -207,7 +207,7 @@ struct Trace {
 struct Scenario {
   Course course;
   Pose start;
-  LinePathConfig config;
+  SteeringConfig config;
   double settle = 1.0;           // m of line before errors count
   double stop_before_end = 0.6;  // m: stop once the band would look past the end
   double pixel_noise = 0.0;      // uniform +- px on the centroid
@@ -219,7 +219,7 @@ struct Scenario {
 
 Trace simulate(const Scenario& scenario) {
   const CameraGeometry camera = harnessCamera();
-  LinePathFollower follower(scenario.config, camera, LineControllerConfig());
+  PathLaw follower(scenario.config, camera);
   std::mt19937 random(7);
   std::uniform_real_distribution<double> noise(-scenario.pixel_noise, scenario.pixel_noise);
   Pose pose = scenario.start;
@@ -248,7 +248,7 @@ Trace simulate(const Scenario& scenario) {
     };
     LineMeasurement measurement = bandMeasurement(observe(kBandRow));
     if (scenario.look_ahead) measurement.look_ahead = bandAt(observe(kLookAheadRow), kLookAheadRow);
-    applied = follower.update(measurement, frame * kFrameDt, applied);
+    applied = follower.step({measurement, frame * kFrameDt, applied});
     run.states.push_back(follower.state());
     run.always_following &= follower.state() == LineState::kFollowing;
     pose = drive(pose, {applied.linear, scenario.turn_scale * applied.angular}, kFrameDt);
@@ -275,7 +275,7 @@ void report(const std::string& name, double speed, const Trace& run) {
               run.max_error * 1e3, run.rms_error * 1e3, run.travelled);
 }
 
-TEST(LinePathClosedLoop, StraightLine) {
+TEST(PathLawClosedLoop, StraightLine) {
   Scenario scenario{Course().straight(5.0), Pose(), atSpeed(0.3)};
   scenario.pixel_noise = 0.5;
   const Trace run = simulate(scenario);
@@ -285,7 +285,7 @@ TEST(LinePathClosedLoop, StraightLine) {
   EXPECT_LE(run.max_error, 0.003);
 }
 
-TEST(LinePathClosedLoop, CircleOfRadius60cmAtLowSpeed) {
+TEST(PathLawClosedLoop, CircleOfRadius60cmAtLowSpeed) {
   for (double noise : {0.0, 0.5}) {
     Scenario scenario{circle(), Pose(), atSpeed(0.2)};
     scenario.pixel_noise = noise;
@@ -298,7 +298,7 @@ TEST(LinePathClosedLoop, CircleOfRadius60cmAtLowSpeed) {
   }
 }
 
-TEST(LinePathClosedLoop, SBendAtLowSpeed) {
+TEST(PathLawClosedLoop, SBendAtLowSpeed) {
   for (double noise : {0.0, 0.5}) {
     Scenario scenario{sBend(), Pose(), atSpeed(0.2)};
     scenario.settle = 0.3;
@@ -312,7 +312,7 @@ TEST(LinePathClosedLoop, SBendAtLowSpeed) {
   }
 }
 
-TEST(LinePathClosedLoop, CircleAndSBendAtTopSpeed) {
+TEST(PathLawClosedLoop, CircleAndSBendAtTopSpeed) {
   for (bool s_bend : {false, true}) {
     Scenario scenario{s_bend ? sBend() : circle(), Pose(), atSpeed(0.7)};
     scenario.settle = s_bend ? 0.3 : 1.0;
@@ -325,7 +325,7 @@ TEST(LinePathClosedLoop, CircleAndSBendAtTopSpeed) {
   }
 }
 
-TEST(LinePathClosedLoop, UsesTheLookAheadBandToo) {
+TEST(PathLawClosedLoop, UsesTheLookAheadBandToo) {
   for (double speed : {0.2, 0.7}) {
     Scenario scenario{sBend(), Pose(), atSpeed(speed)};
     scenario.settle = 0.3;
@@ -341,7 +341,7 @@ TEST(LinePathClosedLoop, UsesTheLookAheadBandToo) {
 
 // The memory is dead reckoning from the commands: a robot that turns 5 % more or less than
 // commanded distorts the remembered path, which costs about a centimetre on the curves.
-TEST(LinePathClosedLoop, ToleratesAFewPercentOfTurnRateError) {
+TEST(PathLawClosedLoop, ToleratesAFewPercentOfTurnRateError) {
   for (double turn_scale : {0.95, 1.05}) {
     for (bool s_bend : {false, true}) {
       Scenario scenario{s_bend ? sBend() : circle(), Pose(), atSpeed(0.2)};
@@ -357,7 +357,7 @@ TEST(LinePathClosedLoop, ToleratesAFewPercentOfTurnRateError) {
   }
 }
 
-TEST(LinePathClosedLoop, ConvergesFromAnOffsetStart) {
+TEST(PathLawClosedLoop, ConvergesFromAnOffsetStart) {
   // 15 cm beside the line and turned 20 deg toward it, on either side; and parallel to it.
   for (const Pose& start :
        {Pose{0.0, 0.15, degrees(-20.0)}, Pose{0.0, -0.15, degrees(20.0)}, Pose{0.0, 0.15, 0.0}}) {
@@ -374,7 +374,7 @@ TEST(LinePathClosedLoop, ConvergesFromAnOffsetStart) {
 // The harness's offset start: 15 cm left and turned 20 deg further away, where the band misses
 // the line's centre. The fallback spins left (it has no side to prefer) until the band sweeps
 // over the line, and the path takes over from there.
-TEST(LinePathClosedLoop, AcquiresTheLineThroughTheFallbackSearch) {
+TEST(PathLawClosedLoop, AcquiresTheLineThroughTheFallbackSearch) {
   Scenario scenario{Course().straight(4.0), Pose{0.0, 0.15, degrees(20.0)}, atSpeed(0.3)};
   scenario.settle = 2.0;
   const Trace run = simulate(scenario);
@@ -385,7 +385,7 @@ TEST(LinePathClosedLoop, AcquiresTheLineThroughTheFallbackSearch) {
   EXPECT_LT(run.max_error, 0.002);
 }
 
-TEST(LinePathClosedLoop, CrossesGapsInTheLine) {
+TEST(PathLawClosedLoop, CrossesGapsInTheLine) {
   struct Case {
     const char* name;
     Course course;
@@ -406,7 +406,7 @@ TEST(LinePathClosedLoop, CrossesGapsInTheLine) {
   }
 }
 
-TEST(LinePathFollower, WhenTheLineIsLostTheFallbackSearchesThenGivesUp) {
+TEST(PathLaw, WhenTheLineIsLostTheFallbackSearchesThenGivesUp) {
   Scenario scenario{Course().straight(20.0), Pose(), atSpeed(0.3)};
   scenario.blind_after = 2.0;
   scenario.max_time = 20.0;
@@ -420,33 +420,33 @@ TEST(LinePathFollower, WhenTheLineIsLostTheFallbackSearchesThenGivesUp) {
   EXPECT_NEAR(following * kFrameDt, 2.0 + 0.56 / 0.3, 0.2);
 }
 
-TEST(LinePathFollower, NeverSeeingTheLineIsTheFallbacksSearch) {
-  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+TEST(PathLaw, NeverSeeingTheLineIsTheFallbacksSearch) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
   Twist2D applied;
   std::vector<LineState> states;
   for (int frame = 0; frame < 30 * 15; ++frame) {
-    applied = follower.update(bandMeasurement(std::nullopt), frame * kFrameDt, applied);
+    applied = follower.step({bandMeasurement(std::nullopt), frame * kFrameDt, applied});
     states.push_back(follower.state());
     EXPECT_EQ(follower.pathState().points, 0);
   }
-  // LineController's rule: with no side to coast toward it searches at once (turning left).
+  // LineSearch's rule: with no side to coast toward it searches at once (turning left).
   EXPECT_EQ(transitions(states),
             (std::vector<LineState>{LineState::kSearching, LineState::kGaveUp}));
 }
 
-TEST(LinePathFollower, ReportsThePathAtTheBase) {
+TEST(PathLaw, ReportsThePathAtTheBase) {
   // Robot 5 cm right of a straight line, parallel to it, driving along it.
-  LinePathFollower follower(atSpeed(0.2), harnessCamera(), LineControllerConfig());
+  PathLaw follower(atSpeed(0.2), harnessCamera());
   Course course = Course().straight(3.0);
   Pose pose{0.0, -0.05, 0.0};
   const Twist2D straight_on{0.2, 0.0};
   for (int frame = 0; frame < 90; ++frame) {
     const auto column =
         course.bandColumn(harnessCamera(), pose, course.nearest({pose.x, pose.y}, 0).first);
-    follower.update(bandMeasurement(column), frame * kFrameDt, straight_on);
+    follower.step({bandMeasurement(column), frame * kFrameDt, straight_on});
     pose = drive(pose, straight_on, kFrameDt);
   }
-  const LinePathFollower::PathState path = follower.pathState();
+  const PathLaw::PathState path = follower.pathState();
   ASSERT_TRUE(path.valid);
   EXPECT_NEAR(path.lateral, 0.05, 1e-4) << "the path is to the left";
   EXPECT_NEAR(path.heading, 0.0, 1e-3);
@@ -454,21 +454,21 @@ TEST(LinePathFollower, ReportsThePathAtTheBase) {
   EXPECT_GT(path.points, 70);
   for (const cv::Point2d& point : follower.pathPoints()) {
     EXPECT_NEAR(point.y, 0.05, 1e-4);
-    EXPECT_GE(point.x, -LinePathConfig().keep_behind);
+    EXPECT_GE(point.x, -PathConfig().keep_behind);
   }
 }
 
-TEST(LinePathFollower, EstimatesTheCurvatureOfACircle) {
+TEST(PathLaw, EstimatesTheCurvatureOfACircle) {
   Scenario scenario{circle(), Pose(), atSpeed(0.3)};
   scenario.max_time = 5.0;
-  LinePathFollower follower(scenario.config, harnessCamera(), LineControllerConfig());
+  PathLaw follower(scenario.config, harnessCamera());
   Pose pose;
   Twist2D applied;
   size_t index = 0;
   for (int frame = 0; frame < 150; ++frame) {
     index = scenario.course.nearest({pose.x, pose.y}, index).first;
     const auto column = scenario.course.bandColumn(harnessCamera(), pose, index);
-    applied = follower.update(bandMeasurement(column), frame * kFrameDt, applied);
+    applied = follower.step({bandMeasurement(column), frame * kFrameDt, applied});
     pose = drive(pose, applied, kFrameDt);
   }
   ASSERT_TRUE(follower.pathState().valid);
@@ -476,22 +476,22 @@ TEST(LinePathFollower, EstimatesTheCurvatureOfACircle) {
   EXPECT_NEAR(follower.pathState().heading, 0.0, 0.02);
 }
 
-TEST(LinePathFollower, StampGoingBackwardsForgetsThePath) {
-  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+TEST(PathLaw, StampGoingBackwardsForgetsThePath) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
   for (int frame = 0; frame < 10; ++frame) {
-    follower.update(bandMeasurement(320.0 + frame), 100.0 + frame * kFrameDt, {0.3, 0.0});
+    follower.step({bandMeasurement(320.0 + frame), 100.0 + frame * kFrameDt, {0.3, 0.0}});
   }
   EXPECT_EQ(follower.pathState().points, 10);
-  follower.update(bandMeasurement(320.0), 5.0, {0.3, 0.0});
+  follower.step({bandMeasurement(320.0), 5.0, {0.3, 0.0}});
   EXPECT_EQ(follower.pathState().points, 1);
 }
 
-TEST(LinePathFollower, LongFrameGapOrUnknownMotionForgetsThePath) {
-  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+TEST(PathLaw, LongFrameGapOrUnknownMotionForgetsThePath) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
   double stamp = 0.0;
   const auto feed = [&](double dt, const Twist2D& applied) {
     stamp += dt;
-    follower.update(bandMeasurement(320.0), stamp, applied);
+    follower.step({bandMeasurement(320.0), stamp, applied});
   };
   for (int frame = 0; frame < 10; ++frame) feed(kFrameDt, {0.3, 0.0});
   EXPECT_EQ(follower.pathState().points, 10);
@@ -502,29 +502,29 @@ TEST(LinePathFollower, LongFrameGapOrUnknownMotionForgetsThePath) {
   EXPECT_EQ(follower.pathState().points, 1);
 }
 
-TEST(LinePathFollower, RepeatedSightingsAreStoredOnce) {
-  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+TEST(PathLaw, RepeatedSightingsAreStoredOnce) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
   for (int frame = 0; frame < 20; ++frame) {
-    follower.update(bandMeasurement(320.0), frame * kFrameDt, Twist2D());  // standing still
+    follower.step({bandMeasurement(320.0), frame * kFrameDt, Twist2D()});  // standing still
   }
   EXPECT_EQ(follower.pathState().points, 1);
   EXPECT_EQ(follower.state(), LineState::kFollowing);
 }
 
-TEST(LinePathFollower, IgnoresUnconfidentAndRejectedFrames) {
-  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+TEST(PathLaw, IgnoresUnconfidentAndRejectedFrames) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
   LineMeasurement weak = bandMeasurement(320.0);
   weak.band.confidence = 0.1;
-  follower.update(weak, 0.0, Twist2D());
+  follower.step({weak, 0.0, Twist2D()});
   LineMeasurement rejected = bandMeasurement(320.0);
   rejected.error = "empty image";
-  follower.update(rejected, kFrameDt, Twist2D());
+  follower.step({rejected, kFrameDt, Twist2D()});
   EXPECT_EQ(follower.pathState().points, 0);
   EXPECT_NE(follower.state(), LineState::kFollowing);
 }
 
-TEST(LinePathFollower, NeverReturnsNonFiniteUnderGarbage) {
-  LinePathFollower follower(LinePathConfig(), harnessCamera(), LineControllerConfig());
+TEST(PathLaw, NeverReturnsNonFiniteUnderGarbage) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
   std::mt19937 random(3);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double specials[] = {kNaN, kInf, -kInf, 0.0, -1e300, 1e300, 1e-300};
@@ -544,59 +544,47 @@ TEST(LinePathFollower, NeverReturnsNonFiniteUnderGarbage) {
     const double r = unit(random);
     stamp = r < 0.05 ? 0.0 : r < 0.1 ? pick(stamp) : stamp + (r < 0.15 ? 1e6 : kFrameDt);
     if (unit(random) < 0.2) applied = Twist2D{pick(0.3), pick(1.0)};
-    const Twist2D command = follower.update(m, stamp, applied);
+    const Twist2D command = follower.step({m, stamp, applied});
     ASSERT_TRUE(std::isfinite(command.linear) && std::isfinite(command.angular)) << frame;
     ASSERT_LE(std::abs(command.angular), 1.5 + 1e-12);
-    const LinePathFollower::PathState& path = follower.pathState();
+    const PathLaw::PathState& path = follower.pathState();
     ASSERT_TRUE(std::isfinite(path.lateral) && std::isfinite(path.heading) &&
                 std::isfinite(path.curvature));
     applied = command;
   }
 }
 
-TEST(LinePathFollower, RejectsInvalidConfiguration) {
-  const auto throws = [](const LinePathConfig& config, const CameraGeometry& camera,
-                         const LineControllerConfig& fallback) {
+TEST(PathLaw, RejectsInvalidConfiguration) {
+  const auto throws = [](const SteeringConfig& config, const CameraGeometry& camera) {
     try {
-      LinePathFollower follower(config, camera, fallback);
+      PathLaw follower(config, camera);
     } catch (const std::invalid_argument&) {
       return true;
     }
     return false;
   };
-  EXPECT_FALSE(throws(LinePathConfig(), CameraGeometry(), LineControllerConfig()));
-  EXPECT_EQ(validate(LinePathConfig()), "");
+  EXPECT_FALSE(throws(SteeringConfig(), CameraGeometry()));
 
-  LinePathConfig config;
-  config.speed = 0.0;
-  EXPECT_NE(validate(config).find("speed"), std::string::npos);
-  EXPECT_TRUE(throws(config, CameraGeometry(), LineControllerConfig()));
-  config = LinePathConfig();
-  config.min_speed = 0.5;  // above speed
-  EXPECT_NE(validate(config).find("min_speed"), std::string::npos);
-  config = LinePathConfig();
-  config.lateral_gain = kNaN;
-  EXPECT_NE(validate(config).find("lateral_gain"), std::string::npos);
-  config = LinePathConfig();
-  config.max_points = 2;
-  EXPECT_NE(validate(config).find("max_points"), std::string::npos);
-  config = LinePathConfig();
-  config.fit_length = -0.1;
-  EXPECT_NE(validate(config).find("fit_length"), std::string::npos);
+  SteeringConfig config;
+  config.path.lateral_gain = kNaN;
+  EXPECT_TRUE(throws(config, CameraGeometry()));
+  config = SteeringConfig();
+  config.max_linear = 0.0;
+  EXPECT_TRUE(throws(config, CameraGeometry()));
+  config = SteeringConfig();
+  config.pd.kp = -1.0;  // the fallback's
+  EXPECT_TRUE(throws(config, CameraGeometry()));
 
   CameraGeometry camera;
   camera.height_m = 0.0;
-  EXPECT_TRUE(throws(LinePathConfig(), camera, LineControllerConfig()));
-  LineControllerConfig fallback;
-  fallback.kp = -1.0;
-  EXPECT_TRUE(throws(LinePathConfig(), CameraGeometry(), fallback));
+  EXPECT_TRUE(throws(SteeringConfig(), camera));
 }
 
-TEST(LinePathFollower, FallbackAlwaysRunsThePdSearch) {
-  LineControllerConfig lecture;
-  lecture.mode = ControlMode::kLecture;
-  LinePathFollower follower(LinePathConfig(), harnessCamera(), lecture);
-  const Twist2D command = follower.update(bandMeasurement(std::nullopt), 0.0, Twist2D());
+TEST(PathLaw, FallbackIsPdWhateverTheMode) {
+  SteeringConfig lecture;
+  lecture.mode = SteeringMode::kLecture;
+  PathLaw follower(lecture, harnessCamera());
+  const Twist2D command = follower.step({bandMeasurement(std::nullopt), 0.0, Twist2D()});
   EXPECT_EQ(follower.state(), LineState::kSearching);
   EXPECT_GT(command.angular, 0.0);
 }

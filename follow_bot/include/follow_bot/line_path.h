@@ -1,9 +1,9 @@
 // Follows a floor line with the robot's base rather than with the camera band.
 //
 // The band sees the floor about half a metre ahead, so any law that steers on the band error
-// alone cuts corners. LinePathFollower instead remembers where the line was seen, carried along
-// in the robot frame by the commands actually sent (dead reckoning), and tracks that remembered
-// path at base_link with curvature feed-forward:
+// alone cuts corners. PathLaw (SteeringMode::kPath) instead remembers where the line was seen,
+// carried along in the robot frame by the commands actually sent (dead reckoning), and tracks
+// that remembered path at base_link with curvature feed-forward:
 //
 //   curvature command c = kappa + heading_gain * sin(theta_e) + lateral_gain * e_y   (1/m)
 //   angular = linear * c
@@ -19,60 +19,21 @@
 #pragma once
 
 #include <deque>
-#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
 #include "follow_bot/ground_projection.h"
 #include "follow_bot/line_controller.h"
-#include "follow_bot/line_detector.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot/steering_law.h"
 
 namespace follow_bot {
 
-struct LinePathConfig {
-  // Speed. linear = speed, lowered (not below min_speed) so that |linear * c| <= max_angular:
-  // on a sharp curve or a big correction the robot slows down and still drives the arc it
-  // computed; only below min_speed is the angular clamped instead.
-  double speed = 0.3;        // m/s
-  double min_speed = 0.05;   // m/s
-  double max_angular = 1.5;  // rad/s, |angular| bound
-
-  // Steering gains of the distance-parametrised law above. heading_gain^2 = 4 lateral_gain is
-  // critical damping, here a double pole at heading_gain / 2 = 10 per metre: an offset d0
-  // decays as d0 (1 + 10 s) exp(-10 s), to 20 % after 0.3 m and 4 % after 0.5 m without
-  // overshoot; a heading error peaks as an offset after 0.1 m. Stiffer gains barely help (the
-  // remaining error comes from the curvature fit and dead reckoning) but amplify detector noise
-  // and the one-frame lag (2.3 cm of travel per frame at 0.7 m/s and 30 Hz).
-  double heading_gain = 20.0;   // 1/m per unit sin(theta_e)
-  double lateral_gain = 100.0;  // 1/m^2: curvature per metre of e_y
-
-  // Bands below this detector confidence are not remembered.
-  double min_confidence = 0.2;
-
-  // Path memory and fit.
-  // m of path fitted around the base (offset, heading, curvature). Longer is steadier (the
-  // curvature's noise falls as fit_length^-2.5 at a given point spacing) but smooths a sudden
-  // change of curvature over more travel.
-  double fit_length = 0.2;
-  // m the fit may be extended past the remembered points. Before the start of the path, pure
-  // pursuit (below) hands over to the fit linearly over this distance.
-  double max_extrapolation = 0.1;
-  double start_lookahead = 0.3;      // m; until the path reaches the base, aim at a point this far
-  double keep_behind = 0.2;          // m; points further behind the base are forgotten
-  double max_point_age = 10.0;       // s; older points are forgotten (odometry drifts)
-  int max_points = 1000;             // oldest points are forgotten beyond this count
-  double min_point_spacing = 0.002;  // m; closer sightings in the same band are not stored
-  // s; a longer interval between frames makes the dead reckoning too uncertain, so the memory
-  // is cleared.
-  double max_frame_gap = 0.5;
-};
-
-// Empty when the configuration is usable, otherwise a message naming the first bad field.
-std::string validate(const LinePathConfig& config);
-
-class LinePathFollower {
+// Uses config.path, the limits and min_confidence; its fallback is a PdLaw on the same config.
+// Speed: linear = max_linear, lowered (not below min_linear) so that |linear * c| <=
+// max_angular: on a sharp curve or a big correction the robot slows down and still drives the
+// arc it computed; only below min_linear is the angular clamped instead.
+class PathLaw : public SteeringLaw {
  public:
   // The remembered path at the base, for a debug topic.
   struct PathState {
@@ -83,37 +44,30 @@ class LinePathFollower {
     int points = 0;          // points remembered
   };
 
-  // `fallback` configures the LineController that takes over once the remembered path has run
-  // out; it always runs in ControlMode::kPD (the mode with the lost-line search), whatever
-  // fallback.mode says. Throws std::invalid_argument when any of the three is unusable.
-  LinePathFollower(const LinePathConfig& config, const CameraGeometry& camera,
-                   const LineControllerConfig& fallback);
+  // Throws std::invalid_argument when the configuration or the camera is unusable;
+  // config.mode is not looked at.
+  PathLaw(const SteeringConfig& config, const CameraGeometry& camera);
 
-  // The command for one camera frame. `stamp` is the frame's time in seconds and
-  // `applied_since_last_frame` the robot's motion since the previous frame as a twist held over
-  // the interval (exact arc): the command actually sent (after any limiter), or a twist from
-  // wheel odometry where that is better. Never returns a non-finite value:
-  //  * a non-finite stamp gives a zero twist and changes nothing;
-  //  * a stamp earlier than the previous one (sim or bag restart) resets everything first;
-  //  * a non-finite motion, or a gap over max_frame_gap, clears the path memory;
+  // Besides SteeringLaw's rules:
+  //  * frame.applied carries the memory; a non-finite motion, or a gap over max_frame_gap,
+  //    clears it;
   //  * until the remembered path reaches the base (start-up, re-acquisition) the robot drives
   //    the arc tangent to its heading through the remembered point start_lookahead away
   //    (pure pursuit), which on a circle or straight started on the line is the line itself;
-  //  * when no path point remains ahead, the memory is cleared and the fallback controller
-  //    steers; it has been shown the last sighting up to then, so its kLost -> kSearching ->
-  //    kGaveUp sequence is timed from the end of the remembered path and turns toward the side
-  //    the line was last seen on.
-  Twist2D update(const LineMeasurement& measurement, double stamp,
-                 const Twist2D& applied_since_last_frame);
+  //  * when no path point remains ahead, the memory is cleared and the pd fallback steers; it
+  //    has been shown the last sighting up to then, so its lost-line search is timed from the
+  //    end of the remembered path and turns toward the side the line was last seen on.
+  Twist2D step(const LineObservation& frame) override;
 
   // kFollowing while the remembered path steers, otherwise the fallback's state.
-  LineState state() const;
+  LineState state() const override;
+  // Forgets everything, as if newly constructed.
+  void reset() override;
+  SteeringMode mode() const override { return SteeringMode::kPath; }
+
   const PathState& pathState() const { return path_state_; }
   // Remembered line points in base_link (x forward, y left, metres), oldest first.
   std::vector<cv::Point2d> pathPoints() const;
-
-  // Forgets everything, as if newly constructed.
-  void reset();
 
  private:
   struct PathPoint {
@@ -130,9 +84,9 @@ class LinePathFollower {
   bool rememberBand(const BandMeasurement& band, bool look_ahead, double stamp);
   Twist2D drive(double curvature) const;
 
-  LinePathConfig config_;
+  SteeringConfig config_;
   CameraGeometry camera_;
-  LineController fallback_;
+  PdLaw fallback_;
   std::deque<PathPoint> points_;
   PathState path_state_;
   bool following_ = false;

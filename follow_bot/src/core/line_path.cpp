@@ -5,8 +5,6 @@
 #include <optional>
 #include <stdexcept>
 
-#include "follow_bot/config_checks.h"
-
 namespace follow_bot {
 namespace {
 
@@ -164,47 +162,19 @@ std::optional<double> pursuitCurvature(const std::vector<cv::Point2d>& positions
   return curvature;
 }
 
-LineControllerConfig inPdMode(LineControllerConfig config) {
-  config.mode = ControlMode::kPD;
-  return config;
-}
-
-const LinePathConfig& validated(const LinePathConfig& config, const CameraGeometry& camera) {
+const SteeringConfig& validated(const SteeringConfig& config, const CameraGeometry& camera) {
   std::string error = validate(config);
   if (error.empty()) error = validate(camera);
-  if (!error.empty()) throw std::invalid_argument("LinePathFollower: " + error);
+  if (!error.empty()) throw std::invalid_argument("PathLaw: " + error);
   return config;
 }
 
 }  // namespace
 
-std::string validate(const LinePathConfig& c) {
-  for (const std::string& error : {
-           requirePositive("speed", c.speed),
-           requireInRange("min_speed", c.min_speed, 0.0, c.speed),
-           requirePositive("max_angular", c.max_angular),
-           requireAtLeast("heading_gain", c.heading_gain, 0.0),
-           requireAtLeast("lateral_gain", c.lateral_gain, 0.0),
-           requireInRange("min_confidence", c.min_confidence, 0.0, 1.0),
-           requirePositive("fit_length", c.fit_length),
-           requireAtLeast("max_extrapolation", c.max_extrapolation, 0.0),
-           requirePositive("start_lookahead", c.start_lookahead),
-           requireAtLeast("keep_behind", c.keep_behind, 0.0),
-           requirePositive("max_point_age", c.max_point_age),
-           requireAtLeast("max_points", c.max_points, 3),
-           requireAtLeast("min_point_spacing", c.min_point_spacing, 0.0),
-           requirePositive("max_frame_gap", c.max_frame_gap),
-       }) {
-    if (!error.empty()) return error;
-  }
-  return "";
-}
+PathLaw::PathLaw(const SteeringConfig& config, const CameraGeometry& camera)
+    : config_(validated(config, camera)), camera_(camera), fallback_(config) {}
 
-LinePathFollower::LinePathFollower(const LinePathConfig& config, const CameraGeometry& camera,
-                                   const LineControllerConfig& fallback)
-    : config_(validated(config, camera)), camera_(camera), fallback_(inPdMode(fallback)) {}
-
-void LinePathFollower::reset() {
+void PathLaw::reset() {
   fallback_.reset();
   points_.clear();
   path_state_ = PathState();
@@ -213,26 +183,25 @@ void LinePathFollower::reset() {
   last_sighting_ = LineMeasurement();
 }
 
-LineState LinePathFollower::state() const {
-  return following_ ? LineState::kFollowing : fallback_.state();
-}
+LineState PathLaw::state() const { return following_ ? LineState::kFollowing : fallback_.state(); }
 
-std::vector<cv::Point2d> LinePathFollower::pathPoints() const {
+std::vector<cv::Point2d> PathLaw::pathPoints() const {
   std::vector<cv::Point2d> positions;
   positions.reserve(points_.size());
   for (const PathPoint& point : points_) positions.push_back(point.position);
   return positions;
 }
 
-Twist2D LinePathFollower::update(const LineMeasurement& measurement, double stamp,
-                                 const Twist2D& applied_since_last_frame) {
+Twist2D PathLaw::step(const LineObservation& frame) {
+  const LineMeasurement& measurement = frame.measurement;
+  const double stamp = frame.stamp;
   if (!std::isfinite(stamp)) return Twist2D();
   if (has_stamp_ && stamp < last_stamp_) reset();
   const double dt = has_stamp_ ? stamp - last_stamp_ : 0.0;
   has_stamp_ = true;
   last_stamp_ = stamp;
 
-  moveMemory(applied_since_last_frame, dt);
+  moveMemory(frame.applied, dt);
   forgetStalePoints(stamp);
   remember(measurement, stamp);
 
@@ -243,21 +212,21 @@ Twist2D LinePathFollower::update(const LineMeasurement& measurement, double stam
     stamps.push_back(point.stamp);
   }
   path_state_ = PathState();
-  const std::optional<double> pursuit = pursuitCurvature(positions, config_.start_lookahead);
+  const std::optional<double> pursuit = pursuitCurvature(positions, config_.path.start_lookahead);
   std::optional<double> curvature = pursuit;
-  if (const std::optional<PathAtBase> path =
-          fitPathAtBase(positions, stamps, config_.fit_length, config_.max_extrapolation)) {
+  if (const std::optional<PathAtBase> path = fitPathAtBase(
+          positions, stamps, config_.path.fit_length, config_.path.max_extrapolation)) {
     path_state_.valid = true;
     path_state_.lateral = path->lateral;
     path_state_.heading = path->heading;
     path_state_.curvature = path->curvature;
-    curvature = path->curvature + config_.heading_gain * std::sin(path->heading) +
-                config_.lateral_gain * path->lateral;
+    curvature = path->curvature + config_.path.heading_gain * std::sin(path->heading) +
+                config_.path.lateral_gain * path->lateral;
     // Extended backwards past the points the fit is a guess (a quadratic fitted across the
     // start of a curve tilts its extension), so pure pursuit hands over to it gradually as the
     // path reaches the base. before_start > 0 implies max_extrapolation > 0.
     if (pursuit && path->before_start > 0.0) {
-      const double pursuit_weight = path->before_start / config_.max_extrapolation;
+      const double pursuit_weight = path->before_start / config_.path.max_extrapolation;
       curvature = (1.0 - pursuit_weight) * *curvature + pursuit_weight * *pursuit;
     }
   }
@@ -268,19 +237,19 @@ Twist2D LinePathFollower::update(const LineMeasurement& measurement, double stam
     // next starts a fresh path.
     points_.clear();
     path_state_.points = 0;
-    return fallback_.update(measurement, stamp);
+    return fallback_.step(frame);
   }
   path_state_.points = static_cast<int>(points_.size());
   // Keeps the fallback's clock and last side in step, so it starts from the end of the path.
-  fallback_.update(last_sighting_, stamp);
+  fallback_.step(LineObservation{last_sighting_, stamp, frame.applied});
   return drive(*curvature);
 }
 
-void LinePathFollower::moveMemory(const Twist2D& applied, double dt) {
+void PathLaw::moveMemory(const Twist2D& applied, double dt) {
   if (points_.empty() || dt <= 0.0) return;
   const double distance = applied.linear * dt;
   const double turn = applied.angular * dt;
-  if (dt > config_.max_frame_gap || !std::isfinite(distance) || !std::isfinite(turn)) {
+  if (dt > config_.path.max_frame_gap || !std::isfinite(distance) || !std::isfinite(turn)) {
     points_.clear();
     return;
   }
@@ -301,15 +270,15 @@ void LinePathFollower::moveMemory(const Twist2D& applied, double dt) {
   }
 }
 
-void LinePathFollower::forgetStalePoints(double stamp) {
+void PathLaw::forgetStalePoints(double stamp) {
   const auto stale = [&](const PathPoint& point) {
-    return !isFinite(point.position) || point.position.x < -config_.keep_behind ||
-           stamp - point.stamp > config_.max_point_age;
+    return !isFinite(point.position) || point.position.x < -config_.path.keep_behind ||
+           stamp - point.stamp > config_.path.max_point_age;
   };
   points_.erase(std::remove_if(points_.begin(), points_.end(), stale), points_.end());
 }
 
-void LinePathFollower::remember(const LineMeasurement& measurement, double stamp) {
+void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
   if (!measurement.ok()) return;
   const auto seen = [&](const BandMeasurement& band) {
     return band.found && band.confidence >= config_.min_confidence;
@@ -317,7 +286,7 @@ void LinePathFollower::remember(const LineMeasurement& measurement, double stamp
   const bool near = seen(measurement.band) && rememberBand(measurement.band, false, stamp);
   const bool ahead =
       seen(measurement.look_ahead) && rememberBand(measurement.look_ahead, true, stamp);
-  while (points_.size() > static_cast<size_t>(config_.max_points)) points_.pop_front();
+  while (points_.size() > static_cast<size_t>(config_.path.max_points)) points_.pop_front();
   if (!near && !ahead) return;
   last_sighting_ = measurement;
   // The fallback steers on the near band only; a look-ahead sighting alone stands in for it so
@@ -325,7 +294,7 @@ void LinePathFollower::remember(const LineMeasurement& measurement, double stamp
   if (!near) last_sighting_.band = measurement.look_ahead;
 }
 
-bool LinePathFollower::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {
+bool PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {
   const std::optional<cv::Point2d> ground =
       pixelToGround(camera_, band.centroid_x, band.centroid_y);
   if (!ground) return false;
@@ -334,16 +303,17 @@ bool LinePathFollower::rememberBand(const BandMeasurement& band, bool look_ahead
                    [&](const PathPoint& point) { return point.look_ahead == look_ahead; });
   if (latest_of_band != points_.rend()) {
     const cv::Point2d step = *ground - latest_of_band->position;
-    if (step.dot(step) < config_.min_point_spacing * config_.min_point_spacing) return true;
+    const double spacing = config_.path.min_point_spacing;
+    if (step.dot(step) < spacing * spacing) return true;
   }
   points_.push_back(PathPoint{*ground, stamp, look_ahead});
   return true;
 }
 
-Twist2D LinePathFollower::drive(double curvature) const {
-  double linear = config_.speed;
+Twist2D PathLaw::drive(double curvature) const {
+  double linear = config_.max_linear;
   if (std::abs(curvature) * linear > config_.max_angular) {
-    linear = std::max(config_.min_speed, config_.max_angular / std::abs(curvature));
+    linear = std::max(config_.min_linear, config_.max_angular / std::abs(curvature));
   }
   return Twist2D{linear, std::clamp(linear * curvature, -config_.max_angular, config_.max_angular)};
 }

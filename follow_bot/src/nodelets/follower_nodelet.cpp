@@ -1,8 +1,8 @@
 // Follower: the lecture's Follow-Bot as a nodelet. One camera frame in, one status out; a Twist
 // while it follows or searches, silence once it has given up.
 //
-// Thin wiring around LineDetector (band-only HSV threshold + moments) and LineController
-// (lecture law or PD with line search); CommandOutput adds limits, the frame watchdog and the
+// Thin wiring around LineDetector (band-only HSV threshold + moments) and a SteeringLaw (the
+// lecture's, pd or path; makeSteeringLaw); CommandOutput adds limits, the frame watchdog and the
 // final stop. Thresholds and gains are ~params, also live through dynamic_reconfigure.
 #include <memory>
 #include <mutex>
@@ -19,13 +19,12 @@
 
 #include "follow_bot/FollowerConfig.h"
 #include "follow_bot/LineStatus.h"
-#include "follow_bot/line_controller.h"
 #include "follow_bot/line_detector.h"
-#include "follow_bot/line_path.h"
 #include "follow_bot/ros/camera_input.h"
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/ros/params.h"
+#include "follow_bot/steering_law.h"
 #include "image_converter/ros/checked_nodelet.h"
 
 namespace follow_bot {
@@ -35,9 +34,7 @@ namespace {
 // Everything dynamic_reconfigure can change, as core configurations.
 struct Settings {
   LineDetectorConfig detector;
-  LineControllerConfig controller;  // the lecture or pd law, and path mode's fallback
-  LinePathConfig path;
-  bool path_mode = false;
+  SteeringConfig steering;
 };
 
 // Throws std::invalid_argument naming the first bad value. Ranges are the .cfg's: readConfig
@@ -52,31 +49,24 @@ Settings coreSettings(const FollowerConfig& cfg) {
   detector.look_ahead = {cfg.look_ahead_top_fraction, cfg.band_rows};
   detector.min_pixels = cfg.min_pixels;
 
-  LineControllerConfig& controller = settings.controller;
-  settings.path_mode = cfg.mode == "path";
-  const std::optional<ControlMode> mode =
-      settings.path_mode ? ControlMode::kPD : parseControlMode(cfg.mode);
+  SteeringConfig& steering = settings.steering;
+  const std::optional<SteeringMode> mode = parseSteeringMode(cfg.mode);
   if (!mode) {
     throw std::invalid_argument("~mode must be 'lecture', 'pd' or 'path', got '" + cfg.mode + "'");
   }
-  controller.mode = *mode;
-  controller.kp = cfg.kp;
-  controller.kd = cfg.kd;
-  controller.max_linear = cfg.max_linear;
-  controller.min_linear = cfg.min_linear;
-  controller.taper = cfg.taper;
-  controller.max_angular = cfg.max_angular;
-  controller.look_ahead_weight = cfg.look_ahead_weight;
-  controller.search_rate = cfg.search_rate;
+  steering.mode = *mode;
+  steering.max_linear = cfg.max_linear;
+  steering.min_linear = cfg.min_linear;
+  steering.max_angular = cfg.max_angular;
+  steering.pd.kp = cfg.kp;
+  steering.pd.kd = cfg.kd;
+  steering.pd.taper = cfg.taper;
+  steering.pd.look_ahead_weight = cfg.look_ahead_weight;
+  steering.search.search_rate = cfg.search_rate;
+  steering.path.heading_gain = cfg.heading_gain;
+  steering.path.lateral_gain = cfg.lateral_gain;
 
-  LinePathConfig& path = settings.path;
-  path.speed = cfg.max_linear;
-  path.min_speed = cfg.min_linear;
-  path.max_angular = cfg.max_angular;
-  path.heading_gain = cfg.heading_gain;
-  path.lateral_gain = cfg.lateral_gain;
-
-  for (const std::string& error : {validate(detector), validate(controller), validate(path)}) {
+  for (const std::string& error : {validate(detector), validate(steering)}) {
     if (!error.empty()) throw std::invalid_argument(error);
   }
   return settings;
@@ -122,12 +112,9 @@ class FollowerNodelet : public image_converter::CheckedNodelet {
   void apply(const Settings& settings) {
     settings_ = settings;
     detector_ = std::make_unique<LineDetector>(settings.detector);
-    controller_ = std::make_unique<LineController>(settings.controller);
-    path_follower_.reset();
-    if (settings.path_mode && has_intrinsics_) {
-      path_follower_ =
-          std::make_unique<LinePathFollower>(settings.path, camera_, settings.controller);
-    }
+    // Until camera_info arrives path mode steers with pd.
+    law_ =
+        makeSteeringLaw(settings.steering, has_intrinsics_ ? std::optional(camera_) : std::nullopt);
   }
 
   // Every callback runs guarded: an exception drops the message, never the node.
@@ -161,25 +148,19 @@ class FollowerNodelet : public image_converter::CheckedNodelet {
     has_odom_ = true;
   }
 
-  // The law for this frame: path mode needs intrinsics; until they arrive it steers with pd.
   Twist2D steer(const LineMeasurement& seen, double stamp) {
-    if (path_follower_) {
-      if (use_odom_ && !has_odom_) {
-        NODELET_WARN_THROTTLE(5.0, "~use_odom: no odometry on %s yet, using the commands sent",
-                              odom_sub_.getTopic().c_str());
-      }
-      return path_follower_->update(seen, stamp, has_odom_ ? odom_twist_ : last_command_);
+    if (law_->mode() == SteeringMode::kPath && use_odom_ && !has_odom_) {
+      NODELET_WARN_THROTTLE(5.0, "~use_odom: no odometry on %s yet, using the commands sent",
+                            odom_sub_.getTopic().c_str());
     }
-    if (settings_.path_mode) {
+    if (law_->mode() != settings_.steering.mode) {
       NODELET_WARN_THROTTLE(5.0, "path mode: no valid camera_info on %s yet, steering with pd",
                             camera_info_sub_.getTopic().c_str());
     }
-    return controller_->update(seen, stamp);
+    return law_->step({seen, stamp, has_odom_ ? odom_twist_ : last_command_});
   }
 
-  LineState state() const {
-    return path_follower_ ? path_follower_->state() : controller_->state();
-  }
+  LineState state() const { return law_->state(); }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
     guardedCallback("image", [&] { handleImage(msg); });
@@ -229,8 +210,7 @@ class FollowerNodelet : public image_converter::CheckedNodelet {
 
   boost::recursive_mutex mutex_;  // the type dynamic_reconfigure::Server shares
   std::unique_ptr<LineDetector> detector_;
-  std::unique_ptr<LineController> controller_;
-  std::unique_ptr<LinePathFollower> path_follower_;
+  std::unique_ptr<SteeringLaw> law_;
   Settings settings_;
   FollowerConfig applied_config_;  // the dynamic_reconfigure settings in force
   CameraGeometry camera_;
