@@ -68,9 +68,10 @@ std::vector<cv::DMatch> ratioTestMatches(const cv::DescriptorMatcher& matcher, c
 // Matches image B against image A (8-bit grey, BGR or BGRA): ratio-tested matches, a RANSAC
 // homography, and, with options.refine, its ECC refinement when that generalises: every
 // held_out_every-th inlier is held out, RANSAC is fitted to the others and refined by ECC, and
-// the refinement replaces the RANSAC homography (of all inliers) only if its median error on the
-// held-out matches is lower. Never throws on bad input: the result carries the error (blank image,
-// too few features or inliers, degenerate homography).
+// only if the refinement lowers the median error on the held-out matches (at their sub-pixel
+// corners) is the RANSAC homography of all inliers replaced by its ECC refinement. Never
+// throws on bad input: the result carries the error (blank image, too few features or inliers,
+// degenerate homography).
 PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& options);
 
 // The pixel a homography maps `point` to.
