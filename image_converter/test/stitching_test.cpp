@@ -244,6 +244,14 @@ TEST(MatchOptions, RejectsUnusableValues) {
   EXPECT_FALSE(parseDetector("surf", detector));
 }
 
+TEST(MatchOptions, RejectsHoldingOutEveryInlier) {
+  MatchOptions options;
+  options.held_out_every = 1;
+  EXPECT_EQ(validate(options), "held_out_every must be >= 2 (1 would hold out all)");
+  options.held_out_every = 2;
+  EXPECT_EQ(validate(options), "");
+}
+
 TEST(RatioTestMatches, KeepsOnlyUnambiguousNearestNeighbours) {
   // 1-D descriptors: query 0.0 is nearest 0.1, the next at 1.0 (kept); 2.0 is midway between
   // 1.9 and 2.1 (ambiguous, dropped); 1.05 is nearest 1.0 (kept). One train row: no second

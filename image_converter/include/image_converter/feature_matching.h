@@ -1,6 +1,7 @@
 // Feature matching between two views: keypoints, ratio-tested matches and a RANSAC homography.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,8 +24,10 @@ struct MatchOptions {
   int min_inliers = 25;              // fewer inliers: the views are taken not to overlap
   double min_contrast = 2.0;         // grey-level standard deviation below this: a blank image
   // Refine the RANSAC homography by dense ECC alignment of the overlap (cv::findTransformECC):
-  // keypoints sit on a coarse pyramid grid (ORB), the aligned pixels do not.
+  // keypoints sit on a coarse pyramid grid (ORB), the aligned pixels do not. The refinement is
+  // kept only when it lowers the error on inlier matches held out of the fit (see matchPair).
   bool refine = true;
+  int held_out_every = 5;  // every n-th RANSAC inlier is held out to judge the refinement
 };
 
 // Empty when the options are usable, otherwise a message naming the first bad field.
@@ -40,7 +43,13 @@ struct PairMatch {
   int matches = 0;  // after the ratio test
   int inliers = 0;
   double reprojection_error_px = 0.0;  // RMS over inliers of |H b - a|
-  bool refined = false;                // ECC refinement converged and was kept
+  bool refined = false;  // the homography is ECC's (it lowered the held-out error), not RANSAC's
+  // The refinement's judgement: how many inliers were held out of the fit (0: not judged, the
+  // refinement is off or there were too few inliers), and the median of |H b - a| over them for
+  // the RANSAC fit of the other inliers and for its ECC refinement (none when ECC failed).
+  int held_out_matches = 0;
+  double held_out_median_ransac_px = 0.0;
+  std::optional<double> held_out_median_refined_px;
   bool ok() const { return error.empty(); }
 };
 
@@ -56,8 +65,13 @@ std::string checkImage(const cv::Mat& image, const std::string& label, double mi
 std::vector<cv::DMatch> ratioTestMatches(const cv::DescriptorMatcher& matcher, const cv::Mat& query,
                                          const cv::Mat& train, double ratio);
 
-// Matches image B against image A (8-bit grey, BGR or BGRA). Never throws on bad input: the
-// result carries the error (blank image, too few features or inliers, degenerate homography).
+// Matches image B against image A (8-bit grey, BGR or BGRA): ratio-tested matches, a RANSAC
+// homography, and, with options.refine, its ECC refinement when that generalises: every
+// held_out_every-th inlier is held out, RANSAC is fitted to the others and refined by ECC, and
+// only if the refinement lowers the median error on the held-out matches (at their sub-pixel
+// corners) is the RANSAC homography of all inliers replaced by its ECC refinement. Never
+// throws on bad input: the result carries the error (blank image, too few features or inliers,
+// degenerate homography).
 PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& options);
 
 // The pixel a homography maps `point` to.

@@ -1,8 +1,9 @@
 // `rosrun image_converter stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift]
-// [--json]`: stitches overlapping images (left to right) into one panorama. Two images are
-// joined by their homography with a feathered seam, more through cv::Stitcher. With --json,
-// prints each consecutive pair's homography (row-major 3x3, mapping the second image into the
-// first one's pixel frame), match and inlier counts and RMS reprojection error.
+// [--json] [--verbose]`: stitches overlapping images (left to right) into one panorama. Two
+// images are joined by their homography with a feathered seam, more through cv::Stitcher. With
+// --json, prints each consecutive pair's homography (row-major 3x3, mapping the second image
+// into the first one's pixel frame), match and inlier counts, RMS reprojection error and whether
+// the ECC refinement was kept; --verbose says the latter per pair on stderr.
 // Exit status: 0 done, 1 the images could not be stitched or written, 2 bad command line.
 #include <cstdio>
 #include <iomanip>
@@ -19,7 +20,8 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift] [--json]\n\n"
+    "usage: stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift] [--json]\n"
+    "              [--verbose]\n\n"
     "Stitches overlapping images (left to right) into one panorama";
 
 struct Arguments {
@@ -27,6 +29,7 @@ struct Arguments {
   std::string output;
   image_converter::MatchOptions options;
   bool json = false;
+  bool verbose = false;
   bool help = false;
 };
 
@@ -41,8 +44,11 @@ std::string parse(int argc, char** argv, Arguments& arguments, std::string& usag
       "output,o", po::value(&arguments.output)->value_name("FILE"), "panorama to write")(
       "detector", po::value(&detector)->value_name("orb|sift")->default_value(detector),
       "feature detector")("json", po::bool_switch(&arguments.json),
-                          "print each pair's homography, match and inlier counts and RMS "
-                          "reprojection error as JSON");
+                          "print each pair's homography, match and inlier counts, RMS "
+                          "reprojection error and ECC verdict as JSON")(
+      "verbose,v", po::bool_switch(&arguments.verbose),
+      "say on stderr, for each pair, whether the ECC refinement was kept and the held-out errors "
+      "that decided it");
   std::ostringstream text;
   text << options;
   usage = text.str();
@@ -101,10 +107,42 @@ void printJson(const Arguments& arguments, const image_converter::StitchResult& 
         << ", \"b\": " << jsonString(arguments.inputs[i + 1]) << ", \"homography\": [";
     for (int k = 0; k < 9; ++k) out << (k ? ", " : "") << pair.homography(k / 3, k % 3);
     out << "], \"matches\": " << pair.matches << ", \"inliers\": " << pair.inliers
-        << ", \"reprojection_error_px\": " << pair.reprojection_error_px << "}";
+        << ", \"reprojection_error_px\": " << pair.reprojection_error_px
+        << ", \"refined\": " << (pair.refined ? "true" : "false")
+        << ", \"held_out_matches\": " << pair.held_out_matches
+        << ", \"held_out_median_ransac_px\": " << pair.held_out_median_ransac_px
+        << ", \"held_out_median_refined_px\": ";
+    if (pair.held_out_median_refined_px) {
+      out << *pair.held_out_median_refined_px;
+    } else {
+      out << "null";
+    }
+    out << "}";
   }
   out << "\n  ]\n}\n";
   std::cout << out.str();
+}
+
+// One line per pair: which homography was kept and the held-out medians that decided it.
+void printVerdicts(const Arguments& arguments, const image_converter::StitchResult& result) {
+  for (std::size_t i = 0; i < result.pairs.size(); ++i) {
+    const image_converter::PairMatch& pair = result.pairs[i];
+    std::ostringstream line;
+    line << std::fixed << std::setprecision(3) << "stitch: " << arguments.inputs[i] << " + "
+         << arguments.inputs[i + 1] << ": " << pair.inliers << " inliers of " << pair.matches
+         << " matches; ";
+    if (pair.held_out_matches == 0) {
+      line << "ECC refinement not tried (too few inliers to hold some out)";
+    } else if (!pair.held_out_median_refined_px) {
+      line << "ECC refinement failed, RANSAC kept";
+    } else {
+      line << (pair.refined ? "ECC refinement kept" : "RANSAC kept, ECC refinement rejected")
+           << ": held-out median error " << *pair.held_out_median_refined_px << " px refined, "
+           << pair.held_out_median_ransac_px << " px RANSAC (" << pair.held_out_matches
+           << " held-out matches)";
+    }
+    std::cerr << line.str() << "\n";
+  }
 }
 
 }  // namespace
@@ -133,6 +171,7 @@ int main(int argc, char** argv) {
   const image_converter::StitchResult result =
       two ? image_converter::stitchPair(images[0], images[1], arguments.options)
           : image_converter::stitchMany(images, arguments.options);
+  if (arguments.verbose) printVerdicts(arguments, result);
   if (!result.ok()) {
     std::cerr << "stitch: cannot stitch: " << result.error << "\n";
     return 1;
