@@ -401,7 +401,7 @@ void bindGeometry(py::module_& m) {
   defKeywordInit(camera, static_cast<Validator<CameraGeometry>>(&validate));
 }
 
-// An enum whose values are the C++ names' ROS spellings, also accepted as strings.
+// An enum whose values are the C++ names' ROS spellings; E("name") parses one.
 template <class E>
 void defStringInit(py::enum_<E>& cls, std::optional<E> (*parse)(const std::string&)) {
   cls.def(py::init([parse](const std::string& name) {
@@ -409,7 +409,27 @@ void defStringInit(py::enum_<E>& cls, std::optional<E> (*parse)(const std::strin
     if (!value) throw py::value_error("unknown value '" + name + "'");
     return *value;
   }));
-  py::implicitly_convertible<py::str, E>();
+}
+
+// A config field of enum type E that also takes the value's name: a str is parsed (ValueError
+// naming the field for an unknown one), anything else must be an E.
+template <class Config, class E>
+void defEnumField(py::class_<Config>& cls, const char* name, E Config::*field,
+                  std::optional<E> (*parse)(const std::string&)) {
+  const std::string field_name = name;
+  cls.def_property(
+      name, [field](const Config& config) { return config.*field; },
+      [field, parse, field_name](Config& config, const py::object& value) {
+        if (!py::isinstance<py::str>(value)) {
+          config.*field = value.cast<E>();
+          return;
+        }
+        const std::optional<E> parsed = parse(value.cast<std::string>());
+        if (!parsed) {
+          throw py::value_error(field_name + ": unknown value '" + value.cast<std::string>() + "'");
+        }
+        config.*field = *parsed;
+      });
 }
 
 void bindBeaconController(py::module_& m) {
@@ -419,8 +439,8 @@ void bindBeaconController(py::module_& m) {
 
   py::class_<BeaconObject> object(m, "BeaconObject",
                                   "size_m: a sphere's radius, a box's width facing the camera.");
-  object.def_readwrite("shape", &BeaconObject::shape)
-      .def_readwrite("size_m", &BeaconObject::size_m);
+  defEnumField(object, "shape", &BeaconObject::shape, &parseBeaconShape);
+  object.def_readwrite("size_m", &BeaconObject::size_m);
   defKeywordInit(object, static_cast<Validator<BeaconObject>>(&validate));
 
   py::class_<RangeEstimate> range(m, "RangeEstimate", "Ranges in m; None when not observable.");
@@ -446,8 +466,8 @@ void bindBeaconController(py::module_& m) {
 
   using Config = BeaconControllerConfig;
   py::class_<Config> config(m, "BeaconControllerConfig");
-  config.def_readwrite("mode", &Config::mode)
-      .def_readwrite("search_rate", &Config::search_rate)
+  defEnumField(config, "mode", &Config::mode, &parseBeaconMode);
+  config.def_readwrite("search_rate", &Config::search_rate)
       .def_readwrite("follow_colour", &Config::follow_colour)
       .def_readwrite("stop_colour", &Config::stop_colour)
       .def_readwrite("close_area", &Config::close_area)
