@@ -10,7 +10,9 @@ ValueError, never crash; frames are read in place, row-strided crops included.
 
 import json
 import math
+import re
 import subprocess
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -368,3 +370,13 @@ def test_imports_with_debians_python():
         capture_output=True, text=True, check=True, timeout=60,
     )  # fmt: skip
     assert out.stdout.startswith("LineDetectorConfig(lower=HsvColor(h=20, s=100, v=100)")
+
+
+def test_the_readme_example_runs_with_debians_python():
+    readme = (Path(__file__).resolve().parents[1] / "follow_bot" / "README.md").read_text()
+    example = re.search(r"## From Python.*?```python\n(.*?)```", readme, re.S).group(1)
+    assert len(example.splitlines()) == 10
+    out = subprocess.run(
+        ["/usr/bin/python3", "-c", example], capture_output=True, text=True, check=True, timeout=60
+    )
+    assert out.stdout == "True 505.0 0.578125\n0.10 -0.60\n"
