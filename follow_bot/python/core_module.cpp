@@ -47,8 +47,14 @@ std::string shapeOf(const py::array& array) {
 
 // A cv::Mat header over the pixels of `frame` (no copy): an HxW (channels 1; HxWx1 too) or
 // HxWxC uint8 array whose pixels are packed within each row.
-cv::Mat matView(const py::array& frame, int channels, bool writable = false) {
+cv::Mat matView(const py::handle& object, int channels, bool writable = false) {
   const char* expected = channels == 3 ? "an HxWx3 uint8 BGR array" : "an HxW uint8 grey array";
+  // A plain isinstance check: the py::array argument caster would convert any sequence first.
+  if (!py::isinstance<py::array>(object)) {
+    throw py::type_error(std::string("expected ") + expected + " (numpy), got " +
+                         py::type::of(object).attr("__name__").cast<std::string>());
+  }
+  const auto frame = py::reinterpret_borrow<py::array>(object);
   if (frame.dtype().kind() != 'u' || frame.dtype().itemsize() != 1) {
     throw py::type_error(std::string("expected ") + expected + ", got dtype " +
                          py::str(frame.dtype()).cast<std::string>());
@@ -260,7 +266,7 @@ void bindLineDetector(py::module_& m) {
       .def(py::init<const LineDetectorConfig&>(), "config"_a = LineDetectorConfig())
       .def(
           "detect",
-          [](const LineDetector& detector, const py::array& bgr) {
+          [](const LineDetector& detector, const py::handle& bgr) {
             const cv::Mat frame = matView(bgr, 3);
             py::gil_scoped_release unlocked;
             return detector.detect(frame);
@@ -268,13 +274,14 @@ void bindLineDetector(py::module_& m) {
           "bgr"_a, "The line in an HxWx3 uint8 BGR frame.")
       .def(
           "debug_mask",
-          [](const LineDetector& detector, const py::array& bgr) {
+          [](const LineDetector& detector, const py::handle& bgr) {
             return toArray(detector.debugMask(matView(bgr, 3)));
           },
           "bgr"_a, "HxW uint8: 255 on line pixels inside the band(s).")
       .def(
           "draw_debug",
-          [](const LineDetector& detector, py::array& bgr, const LineMeasurement& measurement) {
+          [](const LineDetector& detector, const py::handle& bgr,
+             const LineMeasurement& measurement) {
             cv::Mat frame = matView(bgr, 3, true);
             return detector.drawDebug(frame, measurement);
           },
@@ -371,7 +378,7 @@ void bindColourBlobs(py::module_& m) {
       .def(py::init<const ColourBlobConfig&>(), "config"_a = ColourBlobConfig())
       .def(
           "detect",
-          [](const ColourBlobDetector& detector, const py::array& bgr) {
+          [](const ColourBlobDetector& detector, const py::handle& bgr) {
             const cv::Mat frame = matView(bgr, 3);
             py::gil_scoped_release unlocked;
             return detector.detect(frame);
@@ -379,7 +386,7 @@ void bindColourBlobs(py::module_& m) {
           "bgr"_a, "Every configured colour in an HxWx3 uint8 BGR frame.")
       .def(
           "mask",
-          [](const ColourBlobDetector& detector, const py::array& bgr, const std::string& name) {
+          [](const ColourBlobDetector& detector, const py::handle& bgr, const std::string& name) {
             return toArray(detector.mask(matView(bgr, 3), name));
           },
           "bgr"_a, "name"_a, "HxW uint8: the cleaned-up mask the named colour's blobs are in.")
@@ -549,7 +556,7 @@ void bindTagDetector(py::module_& m) {
       .def(py::init<const TagDetectorConfig&>(), "config"_a = TagDetectorConfig())
       .def(
           "detect",
-          [](TagDetector& detector, const py::array& grey, const CameraGeometry& camera) {
+          [](TagDetector& detector, const py::handle& grey, const CameraGeometry& camera) {
             return detector.detect(matView(grey, 1), camera);
           },
           "grey"_a, "camera"_a = CameraGeometry(),
