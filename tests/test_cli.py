@@ -13,6 +13,7 @@ TOOLS = {
     "stitch": ["rosrun", "image_converter", "stitch"],
     "marker_probe": ["rosrun", "follow_bot", "marker_probe"],
     "core_reference": ["rosrun", "follow_bot", "core_reference"],
+    "core_call_timer": ["rosrun", "follow_bot", "core_call_timer"],
     "sim": ["rosrun", "harness", "sim"],
     "run_scenario": ["rosrun", "harness", "run_scenario"],
 }
@@ -32,6 +33,7 @@ def run(args: list[str]) -> subprocess.CompletedProcess:
         ("stitch", "-h"),
         ("marker_probe", "--help"),
         ("core_reference", "--help"),
+        ("core_call_timer", "--help"),
         ("sim", "--help"),
         ("run_scenario", "--help"),
     ],
@@ -56,6 +58,8 @@ def test_help_prints_the_usage_and_exits_0(tool, flag):
         ("marker_probe", ["f.png"], "give either --sign IMAGE --width W or --tag-size S"),
         ("core_reference", ["--line"], "core_reference: give --line or --blobs, then at least"),
         ("core_reference", ["--frob", "f.png"], "core_reference: give --line or --blobs"),
+        ("core_call_timer", ["--line"], "core_call_timer: no frames given"),
+        ("core_call_timer", ["--tag", "--rounds", "0", "f.png"], "--rounds needs a count >= 1"),
         ("sim", ["--frob"], "sim: error: unrecognized arguments: --frob"),
         ("run_scenario", ["--frob"], "error: "),  # its prog name is the scenarios owner's
     ],
