@@ -12,6 +12,8 @@ from harness.run_scenario import free_port
 TOOLS = {
     "stitch": ["rosrun", "image_converter", "stitch"],
     "marker_probe": ["rosrun", "follow_bot", "marker_probe"],
+    "core_reference": ["rosrun", "follow_bot", "core_reference"],
+    "core_call_timer": ["rosrun", "follow_bot", "core_call_timer"],
     "sim": ["rosrun", "harness", "sim"],
     "run_scenario": ["rosrun", "harness", "run_scenario"],
 }
@@ -30,6 +32,8 @@ def run(args: list[str]) -> subprocess.CompletedProcess:
         ("stitch", "--help"),
         ("stitch", "-h"),
         ("marker_probe", "--help"),
+        ("core_reference", "--help"),
+        ("core_call_timer", "--help"),
         ("sim", "--help"),
         ("run_scenario", "--help"),
     ],
@@ -52,6 +56,10 @@ def test_help_prints_the_usage_and_exits_0(tool, flag):
         ("marker_probe", ["--tag-size", "0.2"], "marker_probe: no frames given"),
         ("marker_probe", ["--tag-size", "big", "f.png"], "marker_probe: the argument ('big')"),
         ("marker_probe", ["f.png"], "give either --sign IMAGE --width W or --tag-size S"),
+        ("core_reference", ["--line"], "core_reference: give --line or --blobs, then at least"),
+        ("core_reference", ["--frob", "f.png"], "core_reference: give --line or --blobs"),
+        ("core_call_timer", ["--line"], "core_call_timer: no frames given"),
+        ("core_call_timer", ["--tag", "--rounds", "0", "f.png"], "--rounds needs a count >= 1"),
         ("sim", ["--frob"], "sim: error: unrecognized arguments: --frob"),
         ("run_scenario", ["--frob"], "error: "),  # its prog name is the scenarios owner's
     ],

@@ -1,7 +1,8 @@
 // Runs a marker detector (the parking sign or an AprilTag) over image files and prints one JSON
 // line per frame: whether the marker was found, its pose in the camera optical frame, its corners
 // and the detection time (wall and process CPU, ms). Used by tests/test_sign_pose.py and
-// tests/test_tag_pose_accuracy.py to check poses on frames rendered by the harness.
+// tests/test_tag_pose_accuracy.py to check poses on frames rendered by the harness; its poses,
+// corners and quality are exact (17 significant digits) for tests/test_python_core.py.
 //
 //   marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N] [--tag-family F])
 //                [--fx F --fy F --cx C --cy C] [--independent] FRAME...
@@ -117,14 +118,15 @@ void printObservation(const std::string& frame, const follow_bot::MarkerObservat
   if (seen) {
     const cv::Vec3d& t = seen->translation;
     const cv::Matx33d& r = seen->rotation;
-    std::printf(", \"translation\": [%.6f, %.6f, %.6f]", t[0], t[1], t[2]);
-    std::printf(", \"rotation\": [[%.8f, %.8f, %.8f], [%.8f, %.8f, %.8f], [%.8f, %.8f, %.8f]]",
-                r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2));
+    std::printf(", \"translation\": [%.17g, %.17g, %.17g]", t[0], t[1], t[2]);
+    std::printf(
+        ", \"rotation\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g]]",
+        r(0, 0), r(0, 1), r(0, 2), r(1, 0), r(1, 1), r(1, 2), r(2, 0), r(2, 1), r(2, 2));
     std::printf(", \"corners\": [");
     for (size_t i = 0; i < seen->corners.size(); ++i) {
-      std::printf("%s[%.3f, %.3f]", i ? ", " : "", seen->corners[i].x, seen->corners[i].y);
+      std::printf("%s[%.17g, %.17g]", i ? ", " : "", seen->corners[i].x, seen->corners[i].y);
     }
-    std::printf("], \"quality\": %.1f, \"reprojection_error_px\": %.4f", seen->quality,
+    std::printf("], \"quality\": %.17g, \"reprojection_error_px\": %.17g", seen->quality,
                 seen->reprojection_error_px);
   }
   std::printf("}\n");
