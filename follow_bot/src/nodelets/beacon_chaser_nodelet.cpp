@@ -14,7 +14,6 @@
 
 #include <std_msgs/Bool.h>
 #include <opencv2/imgproc.hpp>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/BeaconChaserConfig.h"
 #include "follow_bot/BeaconDetections.h"
@@ -198,10 +197,6 @@ class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
   std::vector<ros::Publisher> found_pubs_;
 };
 
-std::unique_ptr<nodelet::Nodelet> makeBeaconChaserNodelet() {
-  return std::make_unique<BeaconChaserNodelet>();
-}
-
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::BeaconChaserNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(BeaconChaserNodelet)

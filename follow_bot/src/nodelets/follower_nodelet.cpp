@@ -10,7 +10,6 @@
 #include <string>
 
 #include <nav_msgs/Odometry.h>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/FollowerConfig.h"
 #include "follow_bot/LineStatus.h"
@@ -169,10 +168,6 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   ros::Publisher status_pub_;
 };
 
-std::unique_ptr<nodelet::Nodelet> makeFollowerNodelet() {
-  return std::make_unique<FollowerNodelet>();
-}
-
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::FollowerNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(FollowerNodelet)

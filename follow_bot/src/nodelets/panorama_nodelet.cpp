@@ -25,7 +25,6 @@
 #include <nav_msgs/Odometry.h>
 #include <ros/callback_queue.h>
 #include <std_srvs/Trigger.h>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/PanoramaConfig.h"
 #include "follow_bot/ros/behaviour_nodelet.h"
@@ -306,10 +305,6 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   std::unique_ptr<ros::AsyncSpinner> spinner_;
 };
 
-std::unique_ptr<nodelet::Nodelet> makePanoramaNodelet() {
-  return std::make_unique<PanoramaNodelet>();
-}
-
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::PanoramaNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(PanoramaNodelet)

@@ -19,7 +19,6 @@
 #include <tf2_ros/transform_broadcaster.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/ParkerConfig.h"
 #include "follow_bot/marker_target.h"
@@ -229,8 +228,6 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
   ros::Publisher state_pub_;
 };
 
-std::unique_ptr<nodelet::Nodelet> makeParkerNodelet() { return std::make_unique<ParkerNodelet>(); }
-
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::ParkerNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(ParkerNodelet)
