@@ -1,14 +1,39 @@
-// The validate() checks live in image_converter's core next to the VelocityLimiter that uses
-// them; follow_bot code keeps using them under these names.
+// Checks shared by the core's validate() functions: each returns "" when the value is fine,
+// otherwise "<name> must be <rule>, got <value>". NaN and infinities always fail.
 #pragma once
 
-#include "image_converter/config_checks.h"
+#include <cmath>
+#include <sstream>
+#include <string>
 
 namespace follow_bot {
 
-using image_converter::requireAtLeast;
-using image_converter::requireFinite;
-using image_converter::requireInRange;
-using image_converter::requirePositive;
+inline std::string requireFinite(const char* name, double value) {
+  if (std::isfinite(value)) return "";
+  std::ostringstream message;
+  message << name << " must be finite, got " << value;
+  return message.str();
+}
+
+inline std::string requirePositive(const char* name, double value) {
+  if (std::isfinite(value) && value > 0.0) return "";
+  std::ostringstream message;
+  message << name << " must be > 0, got " << value;
+  return message.str();
+}
+
+inline std::string requireAtLeast(const char* name, double value, double min) {
+  if (std::isfinite(value) && value >= min) return "";
+  std::ostringstream message;
+  message << name << " must be >= " << min << ", got " << value;
+  return message.str();
+}
+
+inline std::string requireInRange(const char* name, double value, double min, double max) {
+  if (std::isfinite(value) && value >= min && value <= max) return "";
+  std::ostringstream message;
+  message << name << " must be in [" << min << ", " << max << "], got " << value;
+  return message.str();
+}
 
 }  // namespace follow_bot

@@ -1,14 +1,62 @@
-// The VelocityLimiter lives in image_converter's core, so image_converter's own nodes (the
-// panorama turner) share it; follow_bot code keeps using it under these names.
+// The last line of defence before /cmd_vel: every behaviour node sends its command through a
+// VelocityLimiter, which bounds speed and acceleration and never lets a NaN reach the base.
 #pragma once
 
-#include "image_converter/velocity_limiter.h"
+#include <string>
 
 namespace follow_bot {
 
-using image_converter::Twist2D;
-using image_converter::validate;
-using image_converter::VelocityLimiter;
-using image_converter::VelocityLimiterConfig;
+// A planar velocity command in the robot frame (REP-103): linear along +x (forward) in m/s,
+// angular about +z in rad/s, positive = counter-clockwise = turning left.
+struct Twist2D {
+  double linear = 0.0;
+  double angular = 0.0;
+};
+
+struct VelocityLimiterConfig {
+  double max_linear = 0.7;                 // m/s, magnitude bound on linear
+  double max_angular = 3.141592653589793;  // rad/s, magnitude bound on angular
+  double max_linear_accel = 1.0;           // m/s^2, bound on |change of linear| per second
+  double max_angular_accel = 6.0;          // rad/s^2, bound on |change of angular| per second
+  bool allow_reverse = false;              // when false, negative linear is clamped to 0
+};
+
+// Empty when the configuration is usable, otherwise a message naming the first bad field.
+std::string validate(const VelocityLimiterConfig& config);
+
+// Clamps and rate-limits velocity commands.
+//
+// Safety rules, in order:
+//  * a non-finite component of the desired command is replaced by 0;
+//  * magnitudes are clamped to max_linear / max_angular (and linear to >= 0 unless
+//    allow_reverse);
+//  * each component may change from the previous output by at most accel * dt;
+//  * without a usable dt (dt <= 0 or non-finite) no time is known to have passed, so a component
+//    may only move toward zero (slow down), never speed up;
+//  * before the first command and after reset() or stop() the previous output is taken as zero
+//    (robot at rest), so motion always ramps up from standstill.
+// stop() is the exception to the rate limit: it returns zero at once, because a stop is a
+// safety action and must not be delayed by the deceleration bound.
+class VelocityLimiter {
+ public:
+  // Throws std::invalid_argument with the validate() message when the configuration is unusable.
+  explicit VelocityLimiter(const VelocityLimiterConfig& config = VelocityLimiterConfig());
+
+  // The command to send, given the desired one and the seconds since the previous limit() call.
+  Twist2D limit(const Twist2D& desired, double dt);
+
+  // Immediate zero command; the next limit() ramps up from rest.
+  Twist2D stop();
+
+  // Forgets the previous output (assumes the robot is at rest), e.g. when a node is re-enabled.
+  void reset();
+
+  const Twist2D& lastOutput() const { return last_; }
+  const VelocityLimiterConfig& config() const { return config_; }
+
+ private:
+  VelocityLimiterConfig config_;
+  Twist2D last_;
+};
 
 }  // namespace follow_bot

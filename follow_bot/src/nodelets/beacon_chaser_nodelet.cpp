@@ -2,9 +2,9 @@
 // stop 1 m in front of it", as one nodelet. One camera frame in, one status out; a Twist while
 // it searches or approaches, silence while it stands still.
 //
-// Thin wiring around ColourBlobDetector and BeaconController; CommandOutput adds limits, the
-// frame watchdog and the final stop. Thresholds and gains are ~params, also live through
-// dynamic_reconfigure (cfg/BeaconChaser.cfg).
+// Thin wiring around ColourBlobDetector and BeaconController; BehaviourNodelet adds the camera
+// topics, frame checks, limits, the frame watchdog and the final stop. Thresholds and gains are
+// ~params, also live through dynamic_reconfigure (cfg/BeaconChaser.cfg).
 #include <limits>
 #include <memory>
 #include <optional>
@@ -12,24 +12,15 @@
 #include <string>
 #include <vector>
 
-#include <cv_bridge/cv_bridge.h>
-#include <dynamic_reconfigure/server.h>
-#include <image_transport/image_transport.h>
-#include <nodelet/nodelet.h>
-#include <sensor_msgs/CameraInfo.h>
 #include <std_msgs/Bool.h>
 #include <opencv2/imgproc.hpp>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/BeaconChaserConfig.h"
 #include "follow_bot/BeaconDetections.h"
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
-#include "follow_bot/ros/camera_input.h"
-#include "follow_bot/ros/command_output.h"
+#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
-#include "follow_bot/ros/params.h"
-#include "image_converter/ros/checked_nodelet.h"
 
 namespace follow_bot {
 
@@ -120,108 +111,52 @@ bool steers(BeaconState state) {
 
 }  // namespace
 
-class BeaconChaserNodelet : public image_converter::CheckedNodelet {
+class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
  private:
-  void init() override {
-    ros::NodeHandle& nh = getNodeHandle();
-    ros::NodeHandle& pnh = getPrivateNodeHandle();
-    applied_config_ = readConfig<BeaconChaserConfig>(pnh);  // throws on bad ~params
-    apply(coreSettings(applied_config_, readStartupConfig(pnh)));
-    output_ = std::make_unique<CommandOutput>(nh, pnh);
+  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const BeaconChaserConfig&) override {
+    startup_ = readStartupConfig(pnh);
+    camera() = startup_.camera;
+  }
 
+  // New settings, or new intrinsics (ranges need them), start with fresh controller state (a new
+  // mode must not inherit the old one's).
+  void configure(const BeaconChaserConfig& config) override {
+    startup_.camera = camera();
+    settings_ = coreSettings(config, startup_);
+    detector_ = std::make_unique<ColourBlobDetector>(settings_.detector);
+    controller_ = std::make_unique<BeaconController>(settings_.controller);
+  }
+
+  void advertise(ros::NodeHandle&, ros::NodeHandle& pnh) override {
     detections_pub_ = pnh.advertise<BeaconDetections>("detections", 1);
     for (const ColourSpec& colour : settings_.detector.colours) {  // Lab 5 step 3: one flag each
       found_pubs_.push_back(pnh.advertise<std_msgs::Bool>(colour.name + "_found", 1));
     }
-    image_transport::ImageTransport private_transport(pnh);
-    debug_pub_ = private_transport.advertise("debug_image", 1);
-    camera_info_sub_ = nh.subscribe("camera_info", 1, &BeaconChaserNodelet::onCameraInfo, this);
-
-    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<BeaconChaserConfig>>(mutex_, pnh);
-    reconfigure_->setCallback(
-        [this](BeaconChaserConfig& config, uint32_t) { reconfigure(config); });
-
-    image_transport::ImageTransport transport(nh);
-    image_sub_ = transport.subscribe("image", 1, &BeaconChaserNodelet::onImage, this);
   }
 
-  // Called with mutex_ held by the dynamic_reconfigure server. A combination the core rejects
-  // changes nothing, and the server then reports the settings still in force.
-  void reconfigure(BeaconChaserConfig& config) {
-    const std::string error = applyOrKeep(
-        config, applied_config_,
-        [this](const BeaconChaserConfig& c) { apply(coreSettings(c, settings_.controller)); });
-    if (!error.empty()) {
-      NODELET_WARN("rejected reconfiguration, keeping the previous settings: %s", error.c_str());
-    }
-  }
-
-  // New settings start with fresh controller state (a new mode must not inherit the old one's).
-  void apply(const Settings& settings) {
-    settings_ = settings;
-    detector_ = std::make_unique<ColourBlobDetector>(settings.detector);
-    controller_ = std::make_unique<BeaconController>(settings.controller);
-  }
-
-  // Ranges need the intrinsics; the controller is rebuilt when they change.
-  // Every callback runs guarded: an exception drops the message, never the node.
-  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
-  }
-
-  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    bool changed = false;
-    const std::string error = updateIntrinsics(*info, settings_.controller.camera, changed);
-    if (!error.empty()) {
-      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
-      return;
-    }
-    if (changed || !has_intrinsics_) {
-      has_intrinsics_ = true;
-      apply(settings_);
-    }
-  }
-
-  void onImage(const sensor_msgs::ImageConstPtr& msg) {
-    guardedCallback("image", [&] { handleImage(msg); });
-  }
-
-  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
-    std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    std::string error;
-    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
-    if (!frame) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
-      output_->frameDropped(error);
-      return;
-    }
-    output_->frameArrived();
-    const BlobResult blobs = detector_->detect(frame->image);
+  Decision step(const Frame& frame) override {
+    blobs_ = detector_->detect(frame.image);
     Twist2D desired;
-    if (settings_.controller.mode == BeaconMode::kApproach && !has_intrinsics_) {
+    if (settings_.controller.mode == BeaconMode::kApproach && !hasIntrinsics()) {
       NODELET_WARN_THROTTLE(2.0, "approach needs camera_info on %s for ranges: holding still",
-                            camera_info_sub_.getTopic().c_str());
+                            cameraInfoTopic().c_str());
     } else {
-      desired = controller_->update(blobs, CommandOutput::frameTime(msg->header).toSec());
+      desired = controller_->update(blobs_, frame.time);
     }
     const BeaconState state = controller_->state();
-    const Twist2D command = output_->send(msg->header, desired, steers(state), toString(state));
-    publishDetections(*msg, blobs, command);
-    if (debug_pub_.getNumSubscribers() > 0) publishDebug(*frame, blobs);
+    return {desired, steers(state), toString(state)};
   }
 
-  void publishDetections(const sensor_msgs::Image& msg, const BlobResult& blobs,
-                         const Twist2D& command) {
-    for (std::size_t i = 0; i < blobs.colours.size() && i < found_pubs_.size(); ++i) {
+  void report(const Frame& frame, const Twist2D& sent) override {
+    for (std::size_t i = 0; i < blobs_.colours.size() && i < found_pubs_.size(); ++i) {
       std_msgs::Bool found;
-      found.data = blobs.colours[i].found;
+      found.data = blobs_.colours[i].found;
       found_pubs_[i].publish(found);
     }
     if (detections_pub_.getNumSubscribers() == 0) return;
     BeaconDetections out;
-    out.header = msg.header;
-    for (const ColourBlob& blob : blobs.colours) {
+    out.header = frame.header;
+    for (const ColourBlob& blob : blobs_.colours) {
       BeaconDetection detection;
       detection.colour = blob.name;
       detection.found = blob.found;
@@ -236,44 +171,32 @@ class BeaconChaserNodelet : public image_converter::CheckedNodelet {
       out.detections.push_back(detection);
     }
     out.state = toString(controller_->state());
-    out.linear = command.linear;
-    out.angular = command.angular;
+    out.linear = sent.linear;
+    out.angular = sent.angular;
     detections_pub_.publish(out);
   }
 
-  void publishDebug(const cv_bridge::CvImage& frame, const BlobResult& blobs) {
-    cv_bridge::CvImage debug(frame.header, "bgr8", frame.image.clone());
-    for (const ColourBlob& blob : blobs.colours) {
+  void drawDebug(cv::Mat& canvas) override {
+    for (const ColourBlob& blob : blobs_.colours) {
       if (!blob.found) continue;
-      cv::drawContours(debug.image, std::vector<std::vector<cv::Point>>{blob.contour}, 0,
+      cv::drawContours(canvas, std::vector<std::vector<cv::Point>>{blob.contour}, 0,
                        cv::Scalar(255, 255, 255), 2);
-      cv::circle(debug.image, blob.circle_centre, static_cast<int>(blob.circle_radius),
+      cv::circle(canvas, blob.circle_centre, static_cast<int>(blob.circle_radius),
                  cv::Scalar(0, 255, 255), 1);
-      cv::putText(debug.image, blob.name, blob.bounding_box.tl() - cv::Point(0, 5),
+      cv::putText(canvas, blob.name, blob.bounding_box.tl() - cv::Point(0, 5),
                   cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 2);
     }
-    debug_pub_.publish(debug.toImageMsg());
   }
 
-  boost::recursive_mutex mutex_;  // the type dynamic_reconfigure::Server shares
+  BeaconControllerConfig startup_;  // what only start-up sets: the target and the camera
+  Settings settings_;
   std::unique_ptr<ColourBlobDetector> detector_;
   std::unique_ptr<BeaconController> controller_;
-  Settings settings_;
-  BeaconChaserConfig applied_config_;  // what the server reports after a rejected update
-  bool has_intrinsics_ = false;
-  std::unique_ptr<CommandOutput> output_;
-  std::unique_ptr<dynamic_reconfigure::Server<BeaconChaserConfig>> reconfigure_;
+  BlobResult blobs_;  // the last frame's
   ros::Publisher detections_pub_;
   std::vector<ros::Publisher> found_pubs_;
-  image_transport::Publisher debug_pub_;
-  ros::Subscriber camera_info_sub_;
-  image_transport::Subscriber image_sub_;
 };
-
-std::unique_ptr<nodelet::Nodelet> makeBeaconChaserNodelet() {
-  return std::make_unique<BeaconChaserNodelet>();
-}
 
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::BeaconChaserNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(BeaconChaserNodelet)

@@ -2,30 +2,22 @@
 // while it follows or searches, silence once it has given up.
 //
 // Thin wiring around LineDetector (band-only HSV threshold + moments) and a SteeringLaw (the
-// lecture's, pd or path; makeSteeringLaw); CommandOutput adds limits, the frame watchdog and the
-// final stop. Thresholds and gains are ~params, also live through dynamic_reconfigure.
+// lecture's, pd or path; makeSteeringLaw); BehaviourNodelet adds the camera topics, frame checks,
+// limits, the frame watchdog and the final stop. Thresholds and gains are ~params, also live
+// through dynamic_reconfigure.
 #include <memory>
-#include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
-#include <cv_bridge/cv_bridge.h>
-#include <dynamic_reconfigure/server.h>
-#include <image_transport/image_transport.h>
 #include <nav_msgs/Odometry.h>
-#include <nodelet/nodelet.h>
-#include <sensor_msgs/CameraInfo.h>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/FollowerConfig.h"
 #include "follow_bot/LineStatus.h"
 #include "follow_bot/line_detector.h"
-#include "follow_bot/ros/camera_input.h"
-#include "follow_bot/ros/command_output.h"
+#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
-#include "follow_bot/ros/params.h"
 #include "follow_bot/steering_law.h"
-#include "image_converter/ros/checked_nodelet.h"
 
 namespace follow_bot {
 
@@ -74,80 +66,35 @@ Settings coreSettings(const FollowerConfig& cfg) {
 
 }  // namespace
 
-class FollowerNodelet : public image_converter::CheckedNodelet {
+class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
  private:
-  void init() override {
-    ros::NodeHandle& nh = getNodeHandle();
-    ros::NodeHandle& pnh = getPrivateNodeHandle();
-
-    applied_config_ = readConfig<FollowerConfig>(pnh);  // throws on bad ~params
-    apply(coreSettings(applied_config_));
-    camera_ = readCameraMounting(pnh);
-    output_ = std::make_unique<CommandOutput>(nh, pnh);
-    camera_info_sub_ = nh.subscribe("camera_info", 1, &FollowerNodelet::onCameraInfo, this);
+  void setup(ros::NodeHandle& nh, ros::NodeHandle& pnh, const FollowerConfig&) override {
+    camera() = readCameraMounting(pnh);
     use_odom_ = param(pnh, "use_odom", false);
-    if (use_odom_) odom_sub_ = nh.subscribe("odom", 1, &FollowerNodelet::onOdometry, this);
+    if (use_odom_) {
+      odom_sub_ = subscribe<nav_msgs::Odometry>(nh, "odom", [this](const nav_msgs::Odometry& odom) {
+        odom_twist_ = Twist2D{odom.twist.twist.linear.x, odom.twist.twist.angular.z};
+        has_odom_ = true;
+      });
+    }
+  }
 
-    reconfigure_ = std::make_unique<dynamic_reconfigure::Server<FollowerConfig>>(mutex_, pnh);
-    reconfigure_->setCallback([this](FollowerConfig& config, uint32_t) { reconfigure(config); });
-
+  void advertise(ros::NodeHandle&, ros::NodeHandle& pnh) override {
     status_pub_ = pnh.advertise<LineStatus>("line", 1);
-    image_transport::ImageTransport private_transport(pnh);
-    debug_pub_ = private_transport.advertise("debug_image", 1);
-    image_transport::ImageTransport transport(nh);
-    image_sub_ = transport.subscribe("image", 1, &FollowerNodelet::onImage, this);
   }
 
-  // Called with mutex_ held by the dynamic_reconfigure server. A combination the core rejects
-  // changes nothing, and the server then reports the settings still in force.
-  void reconfigure(FollowerConfig& config) {
-    const std::string error = applyOrKeep(
-        config, applied_config_, [this](const FollowerConfig& c) { apply(coreSettings(c)); });
-    if (!error.empty()) {
-      NODELET_WARN("rejected reconfiguration, keeping the previous settings: %s", error.c_str());
-    }
-  }
-
-  // New settings start with fresh controller state (a new law must not inherit the old one's).
-  void apply(const Settings& settings) {
-    settings_ = settings;
-    detector_ = std::make_unique<LineDetector>(settings.detector);
+  // New settings, or new intrinsics (path mode's ground geometry), start with fresh controller
+  // state (a new law must not inherit the old one's).
+  void configure(const FollowerConfig& config) override {
+    settings_ = coreSettings(config);
+    detector_ = std::make_unique<LineDetector>(settings_.detector);
     // Until camera_info arrives path mode steers with pd.
-    law_ =
-        makeSteeringLaw(settings.steering, has_intrinsics_ ? std::optional(camera_) : std::nullopt);
+    law_ = makeSteeringLaw(settings_.steering,
+                           hasIntrinsics() ? std::optional(camera()) : std::nullopt);
   }
 
-  // Every callback runs guarded: an exception drops the message, never the node.
-  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
-  }
-
-  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    bool changed = false;
-    const std::string error = updateIntrinsics(*info, camera_, changed);
-    if (!error.empty()) {
-      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
-      return;
-    }
-    if (changed || !has_intrinsics_) {
-      has_intrinsics_ = true;
-      apply(settings_);
-    }
-  }
-
-  // The base's measured motion: better than the commands for path mode's memory whenever the
-  // base lags or slips.
-  void onOdometry(const nav_msgs::OdometryConstPtr& odom) {
-    guardedCallback("odom", [&] { handleOdometry(odom); });
-  }
-
-  void handleOdometry(const nav_msgs::OdometryConstPtr& odom) {
-    std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    odom_twist_ = Twist2D{odom->twist.twist.linear.x, odom->twist.twist.angular.z};
-    has_odom_ = true;
-  }
-
+  // The base's measured motion (~use_odom) beats the commands for path mode's memory whenever
+  // the base lags or slips.
   Twist2D steer(const LineMeasurement& seen, double stamp) {
     if (law_->mode() == SteeringMode::kPath && use_odom_ && !has_odom_) {
       NODELET_WARN_THROTTLE(5.0, "~use_odom: no odometry on %s yet, using the commands sent",
@@ -155,83 +102,53 @@ class FollowerNodelet : public image_converter::CheckedNodelet {
     }
     if (law_->mode() != settings_.steering.mode) {
       NODELET_WARN_THROTTLE(5.0, "path mode: no valid camera_info on %s yet, steering with pd",
-                            camera_info_sub_.getTopic().c_str());
+                            cameraInfoTopic().c_str());
     }
     return law_->step({seen, stamp, has_odom_ ? odom_twist_ : last_command_});
   }
 
   LineState state() const { return law_->state(); }
 
-  void onImage(const sensor_msgs::ImageConstPtr& msg) {
-    guardedCallback("image", [&] { handleImage(msg); });
-  }
-
-  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
-    std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    std::string error;
-    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
-    if (!frame) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
-      output_->frameDropped(error);
-      return;
-    }
-    // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
-    output_->frameArrived();
-    const LineStatus status = follow(*frame, *msg);
-    if (status_pub_.getNumSubscribers() > 0) status_pub_.publish(status);
-  }
-
-  LineStatus follow(const cv_bridge::CvImage& frame, const sensor_msgs::Image& msg) {
-    const LineMeasurement seen = detector_->detect(frame.image);
-    const Twist2D desired = steer(seen, CommandOutput::frameTime(msg.header).toSec());
+  Decision step(const Frame& frame) override {
+    seen_ = detector_->detect(frame.image);
+    const Twist2D desired = steer(seen_, frame.time);
+    if (!seen_.band.found)
+      NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(state()));
     // Idle once it has given up: any sighting makes it active again.
-    const Twist2D command =
-        output_->send(msg.header, desired, state() != LineState::kGaveUp, toString(state()));
-    last_command_ = command;
-    if (!seen.band.found) NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(state()));
-    if (debug_pub_.getNumSubscribers() > 0) {
-      cv_bridge::CvImage debug(msg.header, "bgr8", frame.image.clone());
-      detector_->drawDebug(debug.image, seen);
-      debug_pub_.publish(debug.toImageMsg());
-    }
-    LineStatus out;
-    out.header = msg.header;
-    out.found = seen.band.found;
-    out.centroid_x = seen.band.centroid_x;
-    out.centroid_y = seen.band.centroid_y;
-    out.error = seen.band.error_normalised;
-    out.confidence = seen.band.confidence;
-    out.pixel_count = seen.band.pixel_count;
-    out.state = toString(state());
-    out.linear = command.linear;
-    out.angular = command.angular;
-    return out;
+    return {desired, state() != LineState::kGaveUp, toString(state())};
   }
 
-  boost::recursive_mutex mutex_;  // the type dynamic_reconfigure::Server shares
+  void report(const Frame& frame, const Twist2D& sent) override {
+    last_command_ = sent;
+    if (status_pub_.getNumSubscribers() == 0) return;
+    LineStatus out;
+    out.header = frame.header;
+    out.found = seen_.band.found;
+    out.centroid_x = seen_.band.centroid_x;
+    out.centroid_y = seen_.band.centroid_y;
+    out.error = seen_.band.error_normalised;
+    out.confidence = seen_.band.confidence;
+    out.pixel_count = seen_.band.pixel_count;
+    out.state = toString(state());
+    out.linear = sent.linear;
+    out.angular = sent.angular;
+    status_pub_.publish(out);
+  }
+
+  void drawDebug(cv::Mat& canvas) override { detector_->drawDebug(canvas, seen_); }
+
   std::unique_ptr<LineDetector> detector_;
   std::unique_ptr<SteeringLaw> law_;
   Settings settings_;
-  FollowerConfig applied_config_;  // the dynamic_reconfigure settings in force
-  CameraGeometry camera_;
-  bool has_intrinsics_ = false;
+  LineMeasurement seen_;  // the last frame's
   Twist2D last_command_;  // what the robot was told to do since the previous frame
-  ros::Subscriber camera_info_sub_;
   bool use_odom_ = false;
   bool has_odom_ = false;
   Twist2D odom_twist_;
   ros::Subscriber odom_sub_;
-  std::unique_ptr<CommandOutput> output_;
-  std::unique_ptr<dynamic_reconfigure::Server<FollowerConfig>> reconfigure_;
   ros::Publisher status_pub_;
-  image_transport::Publisher debug_pub_;
-  image_transport::Subscriber image_sub_;
 };
-
-std::unique_ptr<nodelet::Nodelet> makeFollowerNodelet() {
-  return std::make_unique<FollowerNodelet>();
-}
 
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::FollowerNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(FollowerNodelet)

@@ -2,8 +2,9 @@
 // frame at each, stitches them and publishes the panorama (latched) on ~panorama.
 //
 // Thin wiring around image_converter's PanoramaCapture (the turn schedule) and stitching core;
-// CommandOutput adds limits, the frame watchdog, ~enable, ~status and the final stop. One camera
-// frame in, one status out; a Twist only during a capture (idle otherwise: no cmd_vel at all).
+// BehaviourNodelet adds the camera topics, frame checks, limits, the frame watchdog, ~enable,
+// ~status and the final stop. One camera frame in, one status out; a Twist only during a
+// capture (idle otherwise: no cmd_vel at all).
 // The service waits on its own callback queue while the frames drive the capture on the
 // nodelet's queue.
 #include <algorithm>
@@ -21,27 +22,18 @@
 
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <image_transport/image_transport.h>
 #include <nav_msgs/Odometry.h>
-#include <nodelet/nodelet.h>
 #include <ros/callback_queue.h>
-#include <sensor_msgs/CameraInfo.h>
 #include <std_srvs/Trigger.h>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/PanoramaConfig.h"
-#include "follow_bot/ros/command_output.h"
+#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
-#include "follow_bot/ros/params.h"
 #include "image_converter/panorama_capture.h"
-#include "image_converter/ros/checked_nodelet.h"
-#include "image_converter/ros/frame_msg.h"
 #include "image_converter/stitching.h"
 
 namespace follow_bot {
 
-using image_converter::bgrView;
-using image_converter::guardedCallback;
 using image_converter::MatchOptions;
 using image_converter::PanoramaCapture;
 using image_converter::PanoramaCaptureConfig;
@@ -70,40 +62,26 @@ double yawOf(const nav_msgs::Odometry& odom) {
 
 }  // namespace
 
-class PanoramaNodelet : public image_converter::CheckedNodelet {
+class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
  public:
+  // The ~params are read once: a capture must keep the schedule it started with.
+  PanoramaNodelet()
+      : BehaviourNodelet({/*allow_reverse=*/false, /*live_reconfigure=*/false,
+                          /*debug_image=*/false}) {}
   ~PanoramaNodelet() override {
-    if (spinner_) spinner_->stop();  // output_ then sends the final zero
+    if (spinner_) spinner_->stop();  // output() then sends the final zero
   }
 
  private:
-  void init() override {
-    ros::NodeHandle& nh = getNodeHandle();
-    ros::NodeHandle& pnh = getPrivateNodeHandle();
-    readParams(pnh);  // throws on bad ~params
-    output_ = std::make_unique<CommandOutput>(nh, pnh);
-
-    panorama_pub_ = pnh.advertise<sensor_msgs::Image>("panorama", 1, /*latch=*/true);
-    camera_info_sub_ = nh.subscribe("camera_info", 1, &PanoramaNodelet::onCameraInfo, this);
-    odom_sub_ = nh.subscribe("odom", 1, &PanoramaNodelet::onOdom, this);
-    image_transport::ImageTransport transport(nh);
-    image_sub_ = transport.subscribe("image", 1, &PanoramaNodelet::onImage, this);
-
-    updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, pnh.getNamespace());
-    updater_->setHardwareID("none");
-    updater_->add("panorama", this, &PanoramaNodelet::reportStatus);
-
-    // The service blocks until the capture ends, so it gets a queue and thread of its own.
-    ros::NodeHandle service_nh(pnh);
-    service_nh.setCallbackQueue(&service_queue_);
-    capture_srv_ = service_nh.advertiseService("capture", &PanoramaNodelet::onCapture, this);
-    spinner_ = std::make_unique<ros::AsyncSpinner>(1, &service_queue_);
-    spinner_->start();
+  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const PanoramaConfig&) override {
+    camera().pitch_rad = param(pnh, "camera_pitch_deg", 0.0) * kPi / 180.0;
+    if (!(std::abs(camera().pitch_rad) < 1.5)) {
+      throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
+    }
   }
 
   // Ranges are the .cfg's (readConfig checks them); the rules linking two ~params are here.
-  void readParams(const ros::NodeHandle& pnh) {
-    const PanoramaConfig cfg = readConfig<PanoramaConfig>(pnh);
+  void configure(const PanoramaConfig& cfg) override {
     requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,
                   "~step_angle_deg must be at most ~total_angle_deg", cfg.step_angle_deg,
                   cfg.total_angle_deg);
@@ -140,61 +118,46 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
     }
     frame_timeout_ = cfg.frame_timeout;
     capture_timeout_ = cfg.capture_timeout;
-
-    camera_.pitch = param(pnh, "camera_pitch_deg", 0.0) * kPi / 180.0;
-    if (!(std::abs(camera_.pitch) < 1.5)) {
-      throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
-    }
   }
 
-  // Every callback runs guarded: an exception drops the message, never the node.
-  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
+  void advertise(ros::NodeHandle& nh, ros::NodeHandle& pnh) override {
+    panorama_pub_ = pnh.advertise<sensor_msgs::Image>("panorama", 1, /*latch=*/true);
+    odom_sub_ = subscribe<nav_msgs::Odometry>(nh, "odom", [this](const nav_msgs::Odometry& odom) {
+      const double yaw = yawOf(odom);
+      if (!std::isfinite(yaw)) {
+        NODELET_ERROR_THROTTLE(5.0, "ignoring odometry: its orientation is not a unit quaternion");
+        return;
+      }
+      yaw_ = yaw;
+    });
+
+    updater_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, pnh.getNamespace());
+    updater_->setHardwareID("none");
+    updater_->add("panorama", this, &PanoramaNodelet::reportStatus);
+
+    // The service blocks until the capture ends, so it gets a queue and thread of its own.
+    ros::NodeHandle service_nh(pnh);
+    service_nh.setCallbackQueue(&service_queue_);
+    capture_srv_ = service_nh.advertiseService("capture", &PanoramaNodelet::onCapture, this);
+    spinner_ = std::make_unique<ros::AsyncSpinner>(1, &service_queue_);
+    spinner_->start();
   }
 
-  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    TurningCamera updated = camera_;
-    updated.fx = info->K[0];
-    updated.fy = info->K[4];
-    updated.cx = info->K[2];
-    updated.cy = info->K[5];
-    const std::string error = validate(updated);
-    if (!error.empty()) {
-      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
-      return;
-    }
-    camera_ = updated;
-    has_intrinsics_ = true;
-  }
-
-  void onOdom(const nav_msgs::OdometryConstPtr& odom) {
-    guardedCallback("odom", [&] { handleOdom(odom); });
-  }
-
-  void handleOdom(const nav_msgs::OdometryConstPtr& odom) {
-    const double yaw = yawOf(*odom);
-    if (!std::isfinite(yaw)) {
-      NODELET_ERROR_THROTTLE(5.0, "ignoring odometry: its orientation is not a unit quaternion");
-      return;
-    }
-    std::lock_guard<std::mutex> lock(mutex_);
-    yaw_ = yaw;
-  }
+  // The intrinsics are read from camera() when stitching: a capture keeps its schedule.
+  void intrinsicsArrived(bool) override {}
 
   bool onCapture(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
-    std::unique_lock<std::mutex> lock(mutex_);
+    std::unique_lock<boost::recursive_mutex> lock(mutex());
     if (start_requested_ || capture_->active()) {
       response.message = "a capture is already running";
       return true;
     }
     const double since_frame = ros::WallTime::now().toSec() - last_frame_wall_;
-    if (!yaw_ || !has_intrinsics_ || since_frame > frame_timeout_) {
-      response.message =
-          std::string("cannot capture: ") +
-          (!yaw_              ? "no pose yet on " + odom_sub_.getTopic()
-           : !has_intrinsics_ ? "no camera_info yet on " + camera_info_sub_.getTopic()
-                              : "no camera frames on " + image_sub_.getTopic());
+    if (!yaw_ || !hasIntrinsics() || since_frame > frame_timeout_) {
+      response.message = std::string("cannot capture: ") +
+                         (!yaw_              ? "no pose yet on " + odom_sub_.getTopic()
+                          : !hasIntrinsics() ? "no camera_info yet on " + cameraInfoTopic()
+                                             : "no camera frames on " + imageTopic());
       return true;
     }
     start_requested_ = true;
@@ -209,7 +172,7 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
       if (silent > frame_timeout_ || timed_out || !ros::ok()) {
         capture_->abort();
         start_requested_ = false;
-        output_->stop();  // the watchdog has mostly done so already
+        output().stop();  // the watchdog has mostly done so already
         outcome_ = Outcome{false, timed_out ? "capture took longer than ~capture_timeout"
                                             : "camera frames stopped during the capture"};
         ++aborts_;
@@ -223,45 +186,33 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
     return true;
   }
 
-  void onImage(const sensor_msgs::ImageConstPtr& msg) {
-    guardedCallback("image", [&] { handleImage(msg); });
-  }
-
-  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    std::string error;
-    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
+  Decision step(const Frame& frame) override {
     updater_->update();
-    if (!frame) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
-      output_->frameDropped(error);
-      return;
-    }
-    output_->frameArrived();
     last_frame_wall_ = ros::WallTime::now().toSec();
-
     if (start_requested_ && yaw_) {
       start_requested_ = false;
       capture_->start(*yaw_);
       frames_.clear();
       yaws_.clear();
     }
-    PanoramaCapture::Step step;
-    if (capture_->active() && yaw_) step = capture_->update(*yaw_);
-    if (step.grab) {
-      frames_.push_back(frame->image.clone());
+    step_ = {};
+    if (capture_->active() && yaw_) step_ = capture_->update(*yaw_);
+    if (step_.grab) {
+      frames_.push_back(frame.image.clone());
       yaws_.push_back(*yaw_);
     }
     Twist2D desired;
-    desired.angular = step.angular;
+    desired.angular = step_.angular;
     const bool capturing = capture_->active();
-    output_->send(msg->header, desired, capturing, capturing ? "capturing" : "idle");
-    if (!step.finished) return;
+    return {desired, capturing, capturing ? "capturing" : "idle"};
+  }
 
-    // Answer this frame first: stitching takes a while and the base should not wait for it.
+  // The frame is answered first: stitching takes a while and the base should not wait for it.
+  void report(const Frame& frame, const Twist2D&) override {
+    if (!step_.finished) return;
     Outcome outcome;
     try {  // the caller must get a reply whatever the stitcher does
-      outcome = stitchAndPublish(msg->header);
+      outcome = stitchAndPublish(frame.header);
     } catch (const std::exception& error) {
       outcome = {false, std::string("stitching failed: ") + error.what()};
     }
@@ -279,7 +230,7 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
     std::string message;
   };
 
-  // The "<node>: panorama" status on /diagnostics. Called by updater_ with mutex_ held.
+  // The "<node>: panorama" status on /diagnostics. Called by updater_ with mutex() held.
   void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
     if (last_outcome_ && !last_outcome_->success) {
       status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR, "last capture failed: %s",
@@ -306,7 +257,8 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
       }
     }
     if (method_ == StitchMethod::kRotation || (method_ == StitchMethod::kAuto && !result.ok())) {
-      result = stitchByRotation(frames_, yaws_, camera_);
+      const CameraGeometry& c = camera();
+      result = stitchByRotation(frames_, yaws_, TurningCamera{c.fx, c.fy, c.cx, c.cy, c.pitch_rad});
       used = "rotation (odometry yaws)";
     }
     if (!result.ok()) return {false, "stitching failed: " + result.error};
@@ -322,26 +274,23 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
   // Wrong links between look-alike views give panoramas of the wrong width.
   std::string checkWidth(int width) const {
     const double span = std::abs(wrapAngle(yaws_.front() - yaws_.back()));
-    const double fov = 2.0 * std::atan(frames_.front().cols / (2.0 * camera_.fx));
-    const double expected = camera_.fx * (span + fov);
+    const double fov = 2.0 * std::atan(frames_.front().cols / (2.0 * camera().fx));
+    const double expected = camera().fx * (span + fov);
     if (std::abs(width - expected) <= 0.15 * expected) return "";
     return "panorama " + std::to_string(width) + " px wide where the turn predicts " +
            std::to_string(static_cast<int>(expected)) + " px";
   }
 
-  std::mutex mutex_;
-  std::condition_variable changed_;
+  std::condition_variable_any changed_;  // with mutex(): a capture's outcome
   std::unique_ptr<PanoramaCapture> capture_;
-  std::unique_ptr<CommandOutput> output_;
   MatchOptions match_options_;
   StitchMethod method_ = StitchMethod::kAuto;
-  TurningCamera camera_;
-  bool has_intrinsics_ = false;
   std::optional<double> yaw_;
   double frame_timeout_ = 1.0;
   double capture_timeout_ = 120.0;
   double last_frame_wall_ = -1e9;
   bool start_requested_ = false;
+  PanoramaCapture::Step step_;  // the last frame's
   std::optional<Outcome> outcome_;
   std::vector<cv::Mat> frames_;
   std::vector<double> yaws_;
@@ -350,17 +299,12 @@ class PanoramaNodelet : public image_converter::CheckedNodelet {
   std::unique_ptr<diagnostic_updater::Updater> updater_;
 
   ros::Publisher panorama_pub_;
-  ros::Subscriber camera_info_sub_, odom_sub_;
-  image_transport::Subscriber image_sub_;
+  ros::Subscriber odom_sub_;
   ros::CallbackQueue service_queue_;
   ros::ServiceServer capture_srv_;
   std::unique_ptr<ros::AsyncSpinner> spinner_;
 };
 
-std::unique_ptr<nodelet::Nodelet> makePanoramaNodelet() {
-  return std::make_unique<PanoramaNodelet>();
-}
-
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::PanoramaNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(PanoramaNodelet)

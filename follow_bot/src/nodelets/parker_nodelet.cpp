@@ -2,40 +2,31 @@
 // square in front of it. One camera frame in, one status out; a Twist until it is parked.
 //
 // Thin wiring around a MarkerDetector (TagDetector or SignDetector, by ~target) and
-// ParkingServo; CommandOutput adds limits (reversing allowed), the frame watchdog and the final
-// stop.
+// ParkingServo; BehaviourNodelet adds the camera topics, frame checks, limits (reversing
+// allowed), the frame watchdog, the final stop and dynamic_reconfigure (cfg/Parker.cfg).
 #include <cmath>
 #include <memory>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <cv_bridge/cv_bridge.h>
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
-#include <image_transport/image_transport.h>
-#include <nodelet/nodelet.h>
-#include <sensor_msgs/CameraInfo.h>
 #include <std_msgs/String.h>
 #include <tf2/LinearMath/Matrix3x3.h>
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot/ParkerConfig.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot/parking_servo.h"
-#include "follow_bot/ros/camera_input.h"
-#include "follow_bot/ros/command_output.h"
+#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
-#include "follow_bot/ros/params.h"
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/tag_detector.h"
-#include "image_converter/ros/checked_nodelet.h"
 
 namespace follow_bot {
 
@@ -113,84 +104,63 @@ ParkingServoConfig servoConfig(const ParkerConfig& cfg, const CameraGeometry& ca
 
 }  // namespace
 
-class ParkerNodelet : public image_converter::CheckedNodelet {
+class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
+ public:
+  ParkerNodelet() : BehaviourNodelet({/*allow_reverse=*/true}) {}
+
  private:
-  void init() override {
-    ros::NodeHandle& nh = getNodeHandle();
-    ros::NodeHandle& pnh = getPrivateNodeHandle();
-    const ParkerConfig cfg = readConfig<ParkerConfig>(pnh);  // throws on bad ~params
-    detector_ = makeDetector(cfg);
+  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const ParkerConfig& config) override {
     CameraGeometry level;  // ~camera_pitch_deg defaults to 0
     level.pitch_rad = 0.0;
-    camera_ = readCameraMounting(pnh, level);
-    const ParkingServoConfig servo_config = servoConfig(cfg, camera_);
-    servo_ = std::make_unique<ParkingServo>(servo_config);
-    publish_tf_ = cfg.publish_tf;
-    marker_frame_ = cfg.marker_frame;
-    output_ = std::make_unique<CommandOutput>(nh, pnh, /*allow_reverse=*/true);
+    camera() = readCameraMounting(pnh, level);
+    NODELET_INFO("parking in front of the %s at %.2f m", config.target.c_str(), config.standoff);
+  }
 
+  // A new configuration starts a fresh approach.
+  void configure(const ParkerConfig& config) override {
+    std::unique_ptr<MarkerDetector> detector = makeDetector(config);
+    servo_ = std::make_unique<ParkingServo>(servoConfig(config, camera()));
+    detector_ = std::move(detector);
+    marker_frame_ = config.marker_frame;
+    if (!config.publish_tf) {
+      tf_broadcaster_.reset();
+    } else if (!tf_broadcaster_) {
+      tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+    }
+  }
+
+  void advertise(ros::NodeHandle&, ros::NodeHandle& pnh) override {
     pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("target_pose", 1);
     state_pub_ = pnh.advertise<std_msgs::String>("state", 1);
-    image_transport::ImageTransport private_transport(pnh);
-    debug_pub_ = private_transport.advertise("debug_image", 1);
-    if (publish_tf_) tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
-    camera_info_sub_ = nh.subscribe("camera_info", 1, &ParkerNodelet::onCameraInfo, this);
-    image_transport::ImageTransport transport(nh);
-    image_sub_ = transport.subscribe("image", 1, &ParkerNodelet::onImage, this);
-    NODELET_INFO("parking in front of the %s at %.2f m", cfg.target.c_str(), cfg.standoff);
   }
 
-  // Every callback runs guarded: an exception drops the message, never the node.
-  void onCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    guardedCallback("camera_info", [&] { handleCameraInfo(info); });
-  }
+  // The servo keeps the marker inside this camera's view; its approach goes on.
+  void intrinsicsArrived(bool) override { servo_->setIntrinsics(camera()); }
 
-  void handleCameraInfo(const sensor_msgs::CameraInfoConstPtr& info) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    bool changed = false;  // the intrinsics are copied on every message either way
-    const std::string error = updateIntrinsics(*info, camera_, changed);
-    if (!error.empty()) {
-      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
-      return;
-    }
-    servo_->setIntrinsics(camera_);  // it keeps the marker inside this camera's view
-    has_intrinsics_ = true;
-  }
-
-  void onImage(const sensor_msgs::ImageConstPtr& msg) {
-    guardedCallback("image", [&] { handleImage(msg); });
-  }
-
-  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    std::string error;
-    const cv_bridge::CvImageConstPtr frame = bgrView(msg, error);
-    if (!frame) {
-      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
-      output_->frameDropped(error);
-      return;
-    }
-    output_->frameArrived();
-    std::optional<MarkerObservation> marker;
+  Decision step(const Frame& frame) override {
+    marker_.reset();
     Twist2D desired;
-    if (!has_intrinsics_) {
+    if (!hasIntrinsics()) {
       // No pose without intrinsics; the robot holds still rather than search blind.
       NODELET_ERROR_THROTTLE(2.0, "no usable camera_info on %s yet: holding still",
-                             camera_info_sub_.getTopic().c_str());
+                             cameraInfoTopic().c_str());
     } else {
       cv::Mat gray;
-      cv::cvtColor(frame->image, gray, cv::COLOR_BGR2GRAY);
-      marker = detector_->detect(gray, camera_);
-      desired = servo_->update(marker, CommandOutput::frameTime(msg->header).toSec());
+      cv::cvtColor(frame.image, gray, cv::COLOR_BGR2GRAY);
+      marker_ = detector_->detect(gray, camera());
+      desired = servo_->update(marker_, frame.time);
     }
-    std_msgs::String state;
-    state.data = has_intrinsics_ ? toString(servo_->state()) : "searching";
+    state_ = hasIntrinsics() ? toString(servo_->state()) : "searching";
     // Idle once parked (the servo then commands zero): a push out of tolerance re-activates it.
-    const bool parked = has_intrinsics_ && servo_->state() == ParkingState::kParked;
-    output_->send(msg->header, desired, !parked, state.data);
+    const bool parked = hasIntrinsics() && servo_->state() == ParkingState::kParked;
+    return {desired, !parked, state_};
+  }
+
+  void report(const Frame& frame, const Twist2D&) override {
+    std_msgs::String state;
+    state.data = state_;
     state_pub_.publish(state);
-    if (marker) publishPose(msg->header, *marker);
-    if (debug_pub_.getNumSubscribers() > 0) publishDebug(*frame, marker, state.data);
+    if (marker_) publishPose(frame.header, *marker_);
   }
 
   void publishPose(const std_msgs::Header& header, const MarkerObservation& marker) {
@@ -220,54 +190,44 @@ class ParkerNodelet : public image_converter::CheckedNodelet {
     }
   }
 
-  void publishDebug(const cv_bridge::CvImage& frame, const std::optional<MarkerObservation>& marker,
-                    const std::string& state) {
-    cv_bridge::CvImage debug(frame.header, "bgr8", frame.image.clone());
+  void drawDebug(cv::Mat& canvas) override {
+    const std::optional<MarkerObservation>& marker = marker_;
     if (marker) {
       std::vector<cv::Point> outline;
       for (const cv::Point2d& corner : marker->corners) outline.emplace_back(corner);
-      cv::polylines(debug.image, outline, true, cv::Scalar(0, 255, 255), 2);
+      cv::polylines(canvas, outline, true, cv::Scalar(0, 255, 255), 2);
       // Axes from the marker centre: x red, y green, z blue, each half the marker's width.
       const double half = cv::norm(marker->corners[1] - marker->corners[0]) > 0
                               ? 0.5 * cv::norm(marker->translation) *
-                                    cv::norm(marker->corners[1] - marker->corners[0]) / camera_.fx
+                                    cv::norm(marker->corners[1] - marker->corners[0]) / camera().fx
                               : 0.1;
       const std::vector<cv::Point3d> axes = {{0, 0, 0}, {half, 0, 0}, {0, half, 0}, {0, 0, half}};
       cv::Vec3d rvec;
       cv::Rodrigues(marker->rotation, rvec);
-      const cv::Matx33d k(camera_.fx, 0, camera_.cx, 0, camera_.fy, camera_.cy, 0, 0, 1);
+      const cv::Matx33d k(camera().fx, 0, camera().cx, 0, camera().fy, camera().cy, 0, 0, 1);
       std::vector<cv::Point2d> projected;
       cv::projectPoints(axes, rvec, marker->translation, k, cv::noArray(), projected);
       const cv::Scalar colours[] = {{0, 0, 255}, {0, 255, 0}, {255, 0, 0}};
       for (int i = 0; i < 3; ++i) {
-        cv::line(debug.image, projected[0], projected[i + 1], colours[i], 2);
+        cv::line(canvas, projected[0], projected[i + 1], colours[i], 2);
       }
-      cv::putText(debug.image, "id " + std::to_string(marker->id), outline[0] - cv::Point(0, 8),
+      cv::putText(canvas, "id " + std::to_string(marker->id), outline[0] - cv::Point(0, 8),
                   cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 255, 255), 2);
     }
-    cv::putText(debug.image, state, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.7,
+    cv::putText(canvas, state_, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.7,
                 cv::Scalar(255, 255, 255), 2);
-    debug_pub_.publish(debug.toImageMsg());
   }
 
-  std::mutex mutex_;
   std::unique_ptr<MarkerDetector> detector_;
   std::unique_ptr<ParkingServo> servo_;
-  CameraGeometry camera_;
-  bool has_intrinsics_ = false;
-  bool publish_tf_ = false;
   std::string marker_frame_;
-  std::unique_ptr<CommandOutput> output_;
+  std::optional<MarkerObservation> marker_;  // the last frame's
+  std::string state_;                        // the last frame's
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   ros::Publisher pose_pub_;
   ros::Publisher state_pub_;
-  image_transport::Publisher debug_pub_;
-  ros::Subscriber camera_info_sub_;
-  image_transport::Subscriber image_sub_;
 };
-
-std::unique_ptr<nodelet::Nodelet> makeParkerNodelet() { return std::make_unique<ParkerNodelet>(); }
 
 }  // namespace follow_bot
 
-PLUGINLIB_EXPORT_CLASS(follow_bot::ParkerNodelet, nodelet::Nodelet)
+FOLLOW_BOT_EXPORT_NODELET(ParkerNodelet)

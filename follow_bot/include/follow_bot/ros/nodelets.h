@@ -1,9 +1,11 @@
-// Factories for the behaviour nodelets, so the thin nodes can run them without pluginlib.
+// The behaviour nodelets' factories, so the generated nodes (follow_bot_add_node in
+// CMakeLists.txt) run them without pluginlib.
 #pragma once
 
 #include <memory>
 
 #include <nodelet/nodelet.h>
+#include <pluginlib/class_list_macros.hpp>
 
 namespace follow_bot {
 
@@ -13,3 +15,11 @@ std::unique_ptr<nodelet::Nodelet> makeParkerNodelet();
 std::unique_ptr<nodelet::Nodelet> makePanoramaNodelet();
 
 }  // namespace follow_bot
+
+// Defines follow_bot::make<Class>() and exports follow_bot::Class as a nodelet plugin; at global
+// scope after the class.
+#define FOLLOW_BOT_EXPORT_NODELET(Class)                        \
+  std::unique_ptr<nodelet::Nodelet> follow_bot::make##Class() { \
+    return std::make_unique<follow_bot::Class>();               \
+  }                                                             \
+  PLUGINLIB_EXPORT_CLASS(follow_bot::Class, nodelet::Nodelet)

@@ -1,4 +1,4 @@
-#include "image_converter/velocity_limiter.h"
+#include "follow_bot/velocity_limiter.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <random>
 #include <stdexcept>
 
-namespace image_converter {
+namespace follow_bot {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -160,4 +160,4 @@ TEST(VelocityLimiter, OutputIsAlwaysFiniteAndWithinBounds) {
 }
 
 }  // namespace
-}  // namespace image_converter
+}  // namespace follow_bot

@@ -1,12 +1,12 @@
-#include "image_converter/velocity_limiter.h"
+#include "follow_bot/velocity_limiter.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "image_converter/config_checks.h"
+#include "follow_bot/config_checks.h"
 
-namespace image_converter {
+namespace follow_bot {
 namespace {
 
 double finiteOrZero(double value) { return std::isfinite(value) ? value : 0.0; }
@@ -66,4 +66,4 @@ Twist2D VelocityLimiter::stop() {
 
 void VelocityLimiter::reset() { last_ = Twist2D(); }
 
-}  // namespace image_converter
+}  // namespace follow_bot
