@@ -28,6 +28,12 @@ constexpr int kEdgeBandPx = 4;
 // Larger signs are aligned on a block-averaged copy no wider or taller than this.
 constexpr int kAlignMaxPx = 100;
 
+// The rendering samples the narrowest of a ladder of reduced copies of the picture at least as
+// wide as it needs, widths apart by this factor (at most this much finer than needed: no
+// aliasing), built once instead of a reduction per alignment.
+constexpr double kTextureStep = 1.189207115002721;  // 2^(1/4)
+constexpr int kMinTextureCols = 16;
+
 // ECC stops when its correlation coefficient changes by less than this between iterations.
 constexpr double kAlignEpsilon = 1e-6;
 
@@ -129,7 +135,14 @@ SignDetector::SignDetector(const SignDetectorConfig& config) : config_(config) {
                                    (p.y + 0.5) * metres_per_px - height_m_ / 2.0, 0.0f);
   }
   sift_ = cv::SIFT::create(config.max_image_features);
-  reference_ = reference;
+  for (double cols = reference.cols; cols >= kMinTextureCols; cols /= kTextureStep) {
+    const int c = static_cast<int>(std::lround(cols));
+    const int rows =
+        std::max(kMinTextureCols, static_cast<int>(std::lround(c * height_m_ / config.width_m)));
+    cv::Mat level = reference;
+    if (c < reference.cols) cv::resize(reference, level, cv::Size(c, rows), 0, 0, cv::INTER_AREA);
+    textures_.push_back(level);
+  }
 }
 
 bool SignDetector::refineHomography(const cv::Mat& gray, int iterations,
@@ -161,16 +174,12 @@ bool SignDetector::refineHomography(const cv::Mat& gray, int iterations,
 
   const double area = static_cast<double>(size.width) * size.height;
   const int ss = area <= 40000 ? 4 : area <= 160000 ? 2 : 1;  // supersampling of the rendering
-  // Source texture no finer than the supersampled view, so bilinear sampling does not alias.
+  // Source texture hardly finer than the supersampled view, so bilinear sampling does not alias.
   const double width_px = (cv::norm(before[1] - before[0]) + cv::norm(before[2] - before[3])) / 2;
-  const int cols =
-      std::clamp(static_cast<int>(std::lround(width_px * inv_f * ss)), 16, reference_.cols);
-  cv::Mat texture = reference_;
-  if (cols < reference_.cols) {
-    const int rows =
-        std::max(16, static_cast<int>(std::lround(cols * height_m_ / config_.width_m)));
-    cv::resize(reference_, texture, cv::Size(cols, rows), 0, 0, cv::INTER_AREA);
-  }
+  const double cols = width_px * inv_f * ss;
+  const auto coarser = std::find_if(textures_.rbegin(), textures_.rend(),
+                                    [&](const cv::Mat& level) { return level.cols >= cols; });
+  const cv::Mat& texture = coarser == textures_.rend() ? textures_.front() : *coarser;
   // Texture texel (u, v), centres at integers, to the sign plane; view pixel to the fine grid
   // (fine sample k sits at view pixel (k + 0.5) / ss - 0.5).
   const double mx = config_.width_m / texture.cols;
