@@ -47,6 +47,8 @@ constexpr int kSearchMarginPx = 64;
 // and spacing, so they spread over the sign.
 constexpr double kTrackCornerQuality = 0.01;
 constexpr double kTrackCornerSpacingPx = 5.0;
+// Corners are found on a block-averaged copy of a sign bigger than this (pixels).
+constexpr int kCornersMaxPx = 200;
 // Lucas-Kanade stops after this many iterations or a step below this many pixels.
 constexpr int kTrackIterations = 30;
 constexpr double kTrackEpsilonPx = 0.01;
@@ -298,17 +300,27 @@ std::optional<SignDetector::Matches> SignDetector::trackInto(const cv::Mat& gray
   if (sign.empty()) return std::nullopt;
   // Corners in the last frame well inside the sign: along its outline the camera sees it
   // blended with a background that moves differently.
+  // A big sign's corners are found on a block-averaged copy: enough of them, for less.
+  const int f = std::max(1, static_cast<int>(std::ceil(std::max(sign.width, sign.height) /
+                                                       static_cast<double>(kCornersMaxPx))));
+  const cv::Size size(sign.width / f, sign.height / f);
+  if (size.width < 1 || size.height < 1) return std::nullopt;
+  cv::Mat searched = last_frame_(cv::Rect(sign.tl(), size * f));
+  if (f > 1) cv::resize(searched, searched, size, 0, 0, cv::INTER_AREA);
   std::vector<cv::Point> polygon;
   for (const cv::Point2f& p : outline) {
-    polygon.emplace_back(cvRound((p.x - sign.x) * 16), cvRound((p.y - sign.y) * 16));
+    polygon.emplace_back(cvRound((p.x - sign.x) * 16 / f), cvRound((p.y - sign.y) * 16 / f));
   }
-  cv::Mat mask = cv::Mat::zeros(sign.size(), CV_8UC1);
+  cv::Mat mask = cv::Mat::zeros(size, CV_8UC1);
   cv::fillConvexPoly(mask, polygon, cv::Scalar(255), cv::LINE_8, 4);
-  const cv::Size band(2 * kEdgeBandPx + 1, 2 * kEdgeBandPx + 1);
+  const int edge_band = (kEdgeBandPx + f - 1) / f;
+  const cv::Size band(2 * edge_band + 1, 2 * edge_band + 1);
   cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, band));
   std::vector<cv::Point2f> corners;
-  cv::goodFeaturesToTrack(last_frame_(sign), corners, config_.track_features, kTrackCornerQuality,
+  cv::goodFeaturesToTrack(searched, corners, config_.track_features, kTrackCornerQuality,
                           kTrackCornerSpacingPx, mask);
+  // Reduced pixel q covers full pixels f q ... f q + f - 1.
+  for (cv::Point2f& p : corners) p = p * static_cast<float>(f) + cv::Point2f(0.5f, 0.5f) * (f - 1);
   if (static_cast<int>(corners.size()) < config_.min_inliers) return std::nullopt;
 
   // Followed within the reach of the fastest allowed motion (plus the window) around the sign.
