@@ -42,14 +42,14 @@ struct SignDetectorConfig {
   // be told apart reliably and the one nearest the previous frame's pose is kept.
   double ambiguity_px = 0.05;
   bool track = true;                  // follow the sign between frames; false = search every frame
-  int track_features = 100;           // corners inside the sign followed into the next frame
+  int track_features = 50;            // corners inside the sign followed into the next frame
   int track_window_px = 21;           // side of the Lucas-Kanade window (odd)
   int track_levels = 3;               // pyramid levels above full resolution
   double max_track_motion_px = 80.0;  // a corner of the sign moving further: lost, search again
   // A tracked frame starts the alignment within a fraction of a pixel, so it needs fewer passes
   // and iterations than a searched one (ECC is most of a frame's cost).
-  int track_refine_passes = 1;       // render-and-align passes on a tracked frame, all required
-  int track_refine_iterations = 10;  // ECC iteration limit per pass on a tracked frame
+  int track_refine_passes = 1;      // render-and-align passes on a tracked frame, all required
+  int track_refine_iterations = 5;  // ECC iteration limit per pass on a tracked frame
 };
 
 // Empty when the configuration is usable (the image itself is checked by the constructor),
@@ -110,7 +110,7 @@ class SignDetector : public MarkerDetector {
 
   SignDetectorConfig config_;
   double height_m_ = 0.0;
-  cv::Mat reference_;  // the picture in grey levels
+  std::vector<cv::Mat> textures_;  // the picture in grey levels, then ever narrower copies
   cv::Ptr<cv::SIFT> sift_;
   cv::BFMatcher matcher_{cv::NORM_L2};
   std::vector<cv::Point3f> reference_points_;  // keypoints on the sign plane, metres, z = 0

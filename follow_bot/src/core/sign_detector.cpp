@@ -28,6 +28,12 @@ constexpr int kEdgeBandPx = 4;
 // Larger signs are aligned on a block-averaged copy no wider or taller than this.
 constexpr int kAlignMaxPx = 100;
 
+// The rendering samples the narrowest of a ladder of reduced copies of the picture at least as
+// wide as it needs, widths apart by this factor (at most this much finer than needed: no
+// aliasing), built once instead of a reduction per alignment.
+constexpr double kTextureStep = 1.189207115002721;  // 2^(1/4)
+constexpr int kMinTextureCols = 16;
+
 // ECC stops when its correlation coefficient changes by less than this between iterations.
 constexpr double kAlignEpsilon = 1e-6;
 
@@ -41,6 +47,8 @@ constexpr int kSearchMarginPx = 64;
 // and spacing, so they spread over the sign.
 constexpr double kTrackCornerQuality = 0.01;
 constexpr double kTrackCornerSpacingPx = 5.0;
+// Corners are found on a block-averaged copy of a sign bigger than this (pixels).
+constexpr int kCornersMaxPx = 200;
 // Lucas-Kanade stops after this many iterations or a step below this many pixels.
 constexpr int kTrackIterations = 30;
 constexpr double kTrackEpsilonPx = 0.01;
@@ -129,7 +137,14 @@ SignDetector::SignDetector(const SignDetectorConfig& config) : config_(config) {
                                    (p.y + 0.5) * metres_per_px - height_m_ / 2.0, 0.0f);
   }
   sift_ = cv::SIFT::create(config.max_image_features);
-  reference_ = reference;
+  for (double cols = reference.cols; cols >= kMinTextureCols; cols /= kTextureStep) {
+    const int c = static_cast<int>(std::lround(cols));
+    const int rows =
+        std::max(kMinTextureCols, static_cast<int>(std::lround(c * height_m_ / config.width_m)));
+    cv::Mat level = reference;
+    if (c < reference.cols) cv::resize(reference, level, cv::Size(c, rows), 0, 0, cv::INTER_AREA);
+    textures_.push_back(level);
+  }
 }
 
 bool SignDetector::refineHomography(const cv::Mat& gray, int iterations,
@@ -161,16 +176,12 @@ bool SignDetector::refineHomography(const cv::Mat& gray, int iterations,
 
   const double area = static_cast<double>(size.width) * size.height;
   const int ss = area <= 40000 ? 4 : area <= 160000 ? 2 : 1;  // supersampling of the rendering
-  // Source texture no finer than the supersampled view, so bilinear sampling does not alias.
+  // Source texture hardly finer than the supersampled view, so bilinear sampling does not alias.
   const double width_px = (cv::norm(before[1] - before[0]) + cv::norm(before[2] - before[3])) / 2;
-  const int cols =
-      std::clamp(static_cast<int>(std::lround(width_px * inv_f * ss)), 16, reference_.cols);
-  cv::Mat texture = reference_;
-  if (cols < reference_.cols) {
-    const int rows =
-        std::max(16, static_cast<int>(std::lround(cols * height_m_ / config_.width_m)));
-    cv::resize(reference_, texture, cv::Size(cols, rows), 0, 0, cv::INTER_AREA);
-  }
+  const double cols = width_px * inv_f * ss;
+  const auto coarser = std::find_if(textures_.rbegin(), textures_.rend(),
+                                    [&](const cv::Mat& level) { return level.cols >= cols; });
+  const cv::Mat& texture = coarser == textures_.rend() ? textures_.front() : *coarser;
   // Texture texel (u, v), centres at integers, to the sign plane; view pixel to the fine grid
   // (fine sample k sits at view pixel (k + 0.5) / ss - 0.5).
   const double mx = config_.width_m / texture.cols;
@@ -289,17 +300,27 @@ std::optional<SignDetector::Matches> SignDetector::trackInto(const cv::Mat& gray
   if (sign.empty()) return std::nullopt;
   // Corners in the last frame well inside the sign: along its outline the camera sees it
   // blended with a background that moves differently.
+  // A big sign's corners are found on a block-averaged copy: enough of them, for less.
+  const int f = std::max(1, static_cast<int>(std::ceil(std::max(sign.width, sign.height) /
+                                                       static_cast<double>(kCornersMaxPx))));
+  const cv::Size size(sign.width / f, sign.height / f);
+  if (size.width < 1 || size.height < 1) return std::nullopt;
+  cv::Mat searched = last_frame_(cv::Rect(sign.tl(), size * f));
+  if (f > 1) cv::resize(searched, searched, size, 0, 0, cv::INTER_AREA);
   std::vector<cv::Point> polygon;
   for (const cv::Point2f& p : outline) {
-    polygon.emplace_back(cvRound((p.x - sign.x) * 16), cvRound((p.y - sign.y) * 16));
+    polygon.emplace_back(cvRound((p.x - sign.x) * 16 / f), cvRound((p.y - sign.y) * 16 / f));
   }
-  cv::Mat mask = cv::Mat::zeros(sign.size(), CV_8UC1);
+  cv::Mat mask = cv::Mat::zeros(size, CV_8UC1);
   cv::fillConvexPoly(mask, polygon, cv::Scalar(255), cv::LINE_8, 4);
-  const cv::Size band(2 * kEdgeBandPx + 1, 2 * kEdgeBandPx + 1);
+  const int edge_band = (kEdgeBandPx + f - 1) / f;
+  const cv::Size band(2 * edge_band + 1, 2 * edge_band + 1);
   cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, band));
   std::vector<cv::Point2f> corners;
-  cv::goodFeaturesToTrack(last_frame_(sign), corners, config_.track_features, kTrackCornerQuality,
+  cv::goodFeaturesToTrack(searched, corners, config_.track_features, kTrackCornerQuality,
                           kTrackCornerSpacingPx, mask);
+  // Reduced pixel q covers full pixels f q ... f q + f - 1.
+  for (cv::Point2f& p : corners) p = p * static_cast<float>(f) + cv::Point2f(0.5f, 0.5f) * (f - 1);
   if (static_cast<int>(corners.size()) < config_.min_inliers) return std::nullopt;
 
   // Followed within the reach of the fastest allowed motion (plus the window) around the sign.
