@@ -1,4 +1,4 @@
-// The behaviour nodelets' factories, so the generated nodes (follow_bot_add_node in
+// The behaviour nodelets' factories, so the generated nodes (add_behaviour_node in
 // CMakeLists.txt) run them without pluginlib.
 #pragma once
 
