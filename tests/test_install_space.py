@@ -7,8 +7,9 @@ test_installed_sim_drives (make test, ~40 s): colcon installs `worlds`, `follow_
 status the sim waits for) and `harness` into a tmp prefix; the installed sim plays 1 s of lockstep
 sim time on the course against the installed constant_twist.
 test_installed_launch_files (marked full, make test-full only: colcon builds every package, several
-minutes): course.launch (lockstep) drives and ends on a zero Twist; park.launch starts with the tag
-and with the sign.
+minutes): `from follow_bot import core; from image_converter import core` with Debian's python and
+the venv's; course.launch (lockstep) drives and ends on a zero Twist; park.launch starts with the
+tag and with the sign.
 """
 
 import os
@@ -132,6 +133,17 @@ def test_installed_launch_files(tmp_path):
     install = colcon_install(tmp_path, packages)
     port = free_port()
     env = installed_env(install, tmp_path, port)
+    for python in ("/usr/bin/python3", str(REPO / ".venv" / "bin" / "python3")):
+        # The bindings from the install space alone, with Debian's and with the venv's numpy.
+        imported = subprocess.run(
+            [python, "-c", "from follow_bot import core; from image_converter import core as ic; "
+             "print(core.__file__); print(ic.__file__)"],
+            env=env, capture_output=True, text=True, check=True,
+        )  # fmt: skip
+        assert imported.stdout.splitlines() == [
+            str(next((install / package).glob(f"lib/python3/dist-packages/{package}/core.*.so")))
+            for package in ("follow_bot", "image_converter")
+        ]  # fmt: skip
     roscore = start_master(env, port)
     try:
         out, twists = drive_then_ctrl_c(

@@ -1,9 +1,13 @@
-"""follow_bot.core, the pybind11 bindings of the C++ cores: the same results as the C++ library.
+"""follow_bot.core and image_converter.core, the pybind11 bindings of the C++ cores: the same
+results as the C++ library.
 
-Detectors, bit for bit on the same frames (rendered by the harness, written as PNG): the C++
-results come from `core_reference` (LineDetector, ColourBlobDetector) and `marker_probe`
-(TagDetector), which print every field exactly. Controllers: the values the gtests assert
-(follow_bot/test/*_test.cpp, image_converter/test/velocity_limiter_test.cpp), within 1e-9.
+Detectors, bit for bit on the same frames (rendered by the harness or generated, written as PNG):
+the C++ results come from follow_bot's `core_reference` (LineDetector, ColourBlobDetector),
+`marker_probe` (TagDetector, SignDetector) and image_converter's `core_reference` (overlay,
+matching, stitching), which print every field exactly and write images as PNG. Controllers:
+the steering laws and the parking servo against `core_reference` driving them on the same
+frames, the others against the values the gtests assert (follow_bot/test/*_test.cpp,
+image_converter/test/velocity_limiter_test.cpp), within 1e-9.
 Bad configs raise ValueError with the C++ validate() message; bad arrays raise TypeError or
 ValueError, never crash; frames are read in place, row-strided crops included.
 """
@@ -21,6 +25,7 @@ import pytest
 from follow_bot import core
 from harness.render import Renderer
 from harness.world import WORLDS_DIR, load_world
+from image_converter import core as ic_core
 
 # Robot poses (x, y, yaw): on the course's first straight, off to either side, across a curve,
 # facing away from every line.
@@ -149,21 +154,32 @@ def test_colour_blob_detector_equals_cpp(tmp_path, world_name, poses, variant):
     assert result.find("purple") is None
 
 
-def test_tag_detector_equals_cpp_over_a_sequence(tmp_path):
+def tag_frames(tmp_path):
+    """The parking world's tag at TAG_VIEWS: the tag, renderer, grey frames and their files."""
     world = load_world(WORLDS_DIR / "parking.yaml")
     tag = world.objects[0]
-    x, y, _, yaw = tag.pose
-    poses = []
-    for distance, incidence, bearing in TAG_VIEWS:
-        a = yaw + math.radians(incidence)
-        rx, ry = x + distance * math.cos(a), y + distance * math.sin(a)
-        poses.append((rx, ry, math.atan2(y - ry, x - rx) - math.radians(bearing)))
     renderer = Renderer(world)
     greys, files = [], []
-    for i, pose in enumerate(poses):
+    for i, pose in enumerate(views_of(tag.pose, TAG_VIEWS)):
         greys.append(cv2.cvtColor(renderer.render(pose, frame=i), cv2.COLOR_BGR2GRAY))
         files.append(str(tmp_path / f"tag{i:02d}.png"))
         assert cv2.imwrite(files[-1], greys[-1])
+    return tag, renderer, greys, files
+
+
+def views_of(marker_pose, views):
+    """Robot poses seeing a marker at (distance m, incidence deg, bearing deg)."""
+    x, y, _, yaw = marker_pose
+    poses = []
+    for distance, incidence, bearing in views:
+        a = yaw + math.radians(incidence)
+        rx, ry = x + distance * math.cos(a), y + distance * math.sin(a)
+        poses.append((rx, ry, math.atan2(y - ry, x - rx) - math.radians(bearing)))
+    return poses
+
+
+def test_tag_detector_equals_cpp_over_a_sequence(tmp_path):
+    tag, renderer, greys, files = tag_frames(tmp_path)
     cam = renderer.camera
     camera = core.CameraGeometry(fx=cam.fx, fy=cam.fy, cx=cam.cx, cy=cam.cy)
     args = ["--tag-size", str(tag.size), "--tag-id", str(tag.tag_id), "--tag-family", tag.family]
@@ -189,7 +205,165 @@ def test_tag_detector_equals_cpp_over_a_sequence(tmp_path):
     assert detector.detect(np.zeros((480, 640), np.uint8), camera) is None
 
 
-# ---- controllers: the gtests' values -----------------------------------------------------------
+SIGN_VIEWS = [(1.0, 0, 0), (1.2, 20, -5), (1.5, -25, 8), (2.0, 0, 0), (2.5, 35, 0)]
+
+
+def test_sign_detector_equals_cpp_over_a_sequence(tmp_path):
+    world = load_world(WORLDS_DIR / "parking_sign.yaml")
+    (sign,) = world.objects
+    renderer = Renderer(world, noise_sigma=2.0, seed=1)
+    greys, files = [], []
+    for i, pose in enumerate(views_of(sign.pose, SIGN_VIEWS)):
+        greys.append(cv2.cvtColor(renderer.render(pose, frame=i), cv2.COLOR_BGR2GRAY))
+        files.append(str(tmp_path / f"sign{i:02d}.png"))
+        assert cv2.imwrite(files[-1], greys[-1])
+    expected = run_json(
+        "rosrun", "follow_bot", "marker_probe", "--sign", str(sign.path), "--width",
+        repr(sign.width), *files,
+    )  # fmt: skip
+    # One detector over the sequence, as the probe: it tracks the sign from frame to frame.
+    detector = core.SignDetector(core.SignDetectorConfig(image_path=str(sign.path),
+                                                         width_m=sign.width))  # fmt: skip
+    assert detector.reference_features >= 50
+    tracked = 0
+    for grey, cpp in zip(greys, expected, strict=True):
+        seen = detector.detect(grey, core.CameraGeometry())
+        assert (seen is not None) == cpp["found"], cpp["frame"]
+        if seen is None:
+            continue
+        assert seen.id == 0
+        assert seen.corners.tolist() == cpp["corners"]
+        assert seen.rotation.tolist() == cpp["rotation"]
+        assert seen.translation.tolist() == cpp["translation"]
+        assert (seen.quality, seen.reprojection_error_px) == (
+            cpp["quality"], cpp["reprojection_error_px"],
+        )  # fmt: skip
+        tracked += detector.last_tracked
+    assert sum(c["found"] for c in expected) >= len(SIGN_VIEWS) - 1
+    detector.reset()
+    assert detector.detect(np.zeros((480, 640), np.uint8)) is None and not detector.last_tracked
+
+
+# ---- controllers: the C++ driving them on the same frames, and the gtests' values -------------
+
+
+def twist_fields(twist):
+    return (twist.linear, twist.angular)
+
+
+def assert_twist_close(twist, cpp, frame):
+    assert twist.linear == pytest.approx(cpp["linear"], abs=1e-9), frame
+    assert twist.angular == pytest.approx(cpp["angular"], abs=1e-9), frame
+
+
+# The robot drives along the course's first straight and off it, then looks away (line lost).
+STEER_POSES = [(-2.5 + 0.02 * i, -3.5 + 0.004 * i, 0.05 * math.sin(i / 3)) for i in range(12)] + [
+    (0.0, 0.0, 0.5 + 0.01 * i) for i in range(6)
+]
+
+
+@pytest.mark.parametrize("mode", ["lecture", "pd", "path"])
+def test_steering_laws_equal_cpp_on_course_frames(tmp_path, mode):
+    _, frames, files = render("course", STEER_POSES, tmp_path, noise_sigma=4.0)
+    expected = run_json("rosrun", "follow_bot", "core_reference", "--steer", mode, *files)
+    detector = core.LineDetector()
+    law = core.make_steering_law(core.SteeringConfig(mode=mode), core.CameraGeometry())
+    assert law.mode == core.SteeringMode(mode)
+    applied = core.Twist2D()
+    states = set()
+    for i, (frame, cpp) in enumerate(zip(frames, expected, strict=True)):
+        applied = law.step(detector.detect(frame), i / 30.0, applied)
+        assert_twist_close(applied, cpp, cpp["frame"])
+        assert law.state.name == cpp["state"], cpp["frame"]
+        states.add(cpp["state"])
+    # The sequence sees the line, then loses it (path still steers on its memory of the line).
+    assert states == ({"FOLLOWING"} if mode == "path" else {"FOLLOWING", "LOST"})
+
+
+def test_path_law_without_a_camera_is_pd_and_exposes_its_memory():
+    config = core.SteeringConfig(mode="path")
+    assert isinstance(core.make_steering_law(config), core.PdLaw)
+    law = core.make_steering_law(config, core.CameraGeometry())
+    assert isinstance(law, core.PathLaw) and law.path_points().shape == (0, 2)
+    band = core.BandMeasurement(found=True, pixel_count=200, centroid_x=320.0, centroid_y=370.0,
+                                confidence=1.0, row_begin=360, row_end=380)  # fmt: skip
+    law.step(core.LineObservation(measurement=core.LineMeasurement(
+        image_width=640, image_height=480, band=band), stamp=0.0))  # fmt: skip
+    assert law.path_points().shape == (1, 2) and law.path_state.points == 1
+    assert law.path_points()[0, 1] == pytest.approx(0.0, abs=1e-12)  # straight ahead
+
+
+def seen_at_error(e):
+    """A found band at normalised error e (line_controller_test.cpp's seenAtError)."""
+    centroid_x = 320.0 * (1.0 + e)
+    band = core.BandMeasurement(found=True, pixel_count=200, centroid_x=centroid_x,
+                                centroid_y=370.0, error_px=centroid_x - 320.0,
+                                error_normalised=(centroid_x - 320.0) / 320.0,
+                                confidence=1.0)  # fmt: skip
+    return core.LineMeasurement(image_width=640, image_height=480, band=band)
+
+
+def test_pd_law_and_line_search_as_the_gtests():
+    # line_controller_test.cpp: PdLaw.LostThenSearchingThenGivesUpThenResumes
+    law = core.PdLaw()
+    unseen = core.LineMeasurement(image_width=640, image_height=480)
+    law.step(seen_at_error(0.6), 0.0)
+    assert twist_fields(law.step(unseen, 0.5)) == pytest.approx((0.05, -0.4), abs=1e-9)
+    assert law.state == core.LineState.LOST
+    law.step(unseen, 1.0)
+    assert twist_fields(law.step(unseen, 1.01)) == pytest.approx((0.0, -0.6), abs=1e-9)
+    assert law.state == core.LineState.SEARCHING
+    assert twist_fields(law.step(unseen, 13.01)) == (0.0, 0.0)
+    assert law.state == core.LineState.GAVE_UP
+    assert law.step(seen_at_error(-0.2), 501.0).angular > 0.0
+    assert law.state == core.LineState.FOLLOWING
+    # The same state machine alone.
+    search = core.LineSearch()
+    search.seen(0.0, 0.6)
+    assert twist_fields(search.unseen(0.5)) == pytest.approx((0.05, -0.4), abs=1e-9)
+    assert twist_fields(search.unseen(1.01)) == pytest.approx((0.0, -0.6), abs=1e-9)
+    assert search.state == core.LineState.SEARCHING
+    search.reset()
+    assert search.state == core.LineState.LOST
+    # The lecture: linear 0.2, angular -error_px / 100 whenever a pixel is seen.
+    lecture = core.LectureLaw().step(seen_at_error(0.25), 0.0)
+    assert twist_fields(lecture) == pytest.approx((0.2, -0.8), abs=1e-9)
+
+
+def test_parking_servo_equals_cpp_over_a_tag_sequence(tmp_path):
+    tag, _, greys, files = tag_frames(tmp_path)
+    expected = run_json(
+        "rosrun", "follow_bot", "core_reference", "--park", repr(tag.size), str(tag.tag_id),
+        tag.family, *files,
+    )  # fmt: skip
+    detector = core.TagDetector(
+        core.TagDetectorConfig(family=tag.family, id=tag.tag_id, size_m=tag.size)
+    )
+    servo = core.ParkingServo(core.ParkingServoConfig())
+    camera = core.CameraGeometry()
+    for i, (grey, cpp) in enumerate(zip(greys, expected, strict=True)):
+        marker = detector.detect(grey, camera)
+        assert_twist_close(servo.update(marker, i / 30.0), cpp, cpp["frame"])
+        assert servo.state.name.lower() == cpp["state"], cpp["frame"]
+        error = servo.last_error
+        assert (error is None) == (cpp["error"] is None)
+        if error is not None:
+            for name, value in cpp["error"].items():
+                assert getattr(error, name) == pytest.approx(value, abs=1e-9), (cpp["frame"], name)
+    assert servo.state != core.ParkingState.SEARCHING
+
+
+def test_parking_error_of_a_marker_made_in_python():
+    # A marker 1 m straight ahead of a level camera, facing it (its z, into the marker, is the
+    # camera's z: the identity rotation): 1 m along its normal, square and centred.
+    camera = core.CameraGeometry(pitch_rad=0.0)
+    marker = core.MarkerObservation(id=0, rotation=np.eye(3), translation=(0.0, 0.0, 1.0))
+    error = core.parking_error(marker, camera)
+    assert (error.along, error.lateral, error.heading, error.bearing) == pytest.approx(
+        (1.0, 0.0, 0.0, 0.0), abs=1e-9
+    )
+    with pytest.raises(ValueError, match="rotation must be 3x3"):
+        marker.rotation = np.eye(2)
 
 
 def test_velocity_limiter_as_the_gtests():
@@ -283,6 +457,108 @@ def test_beacon_controller_approach_mode_range_from_the_cpp():
     assert twist.linear == pytest.approx(want, abs=1e-9)
 
 
+# ---- image_converter.core: bit for bit against the C++ library ---------------------------------
+
+
+def textured_scene(width, height, seed):
+    """Shapes of random colour on smoothed noise (as tests/test_stitch_cli.py): corners for ORB."""
+    rng = np.random.default_rng(seed)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (height, width, 3), dtype=np.uint8), (0, 0), 2)
+    for _ in range(width * height // 1500):
+        colour = [int(c) for c in rng.integers(0, 256, 3)]
+        x, y = int(rng.integers(0, width)), int(rng.integers(0, height))
+        w, h = (int(v) for v in rng.integers(4, 30, 2))
+        cv2.rectangle(scene, (x, y), (x + w, y + h), colour, cv2.FILLED)
+    return cv2.GaussianBlur(scene, (0, 0), 1.0)
+
+
+def run_ic_reference(*args):
+    return run_json("rosrun", "image_converter", "core_reference", *map(str, args))[0]
+
+
+def pair_fields(pair):
+    return {
+        "error": pair.error, "homography": pair.homography.ravel().tolist(),
+        "keypoints_a": pair.keypoints_a, "keypoints_b": pair.keypoints_b,
+        "matches": pair.matches, "inliers": pair.inliers,
+        "reprojection_error_px": pair.reprojection_error_px, "refined": pair.refined,
+        "held_out_matches": pair.held_out_matches,
+        "held_out_median_ransac_px": pair.held_out_median_ransac_px,
+        "held_out_median_refined_px": pair.held_out_median_refined_px,
+    }  # fmt: skip
+
+
+def test_overlay_equals_cpp_and_draws_in_place(tmp_path):
+    frame = textured_scene(640, 480, 3)
+    assert cv2.imwrite(str(tmp_path / "in.png"), frame)
+    assert run_ic_reference("--overlay", tmp_path / "in.png", tmp_path / "out.png")["drawn"]
+    view = np.full((500, 700, 3), 7, np.uint8)
+    view[10:490, 30:670] = frame
+    crop = view[10:490, 30:670]  # drawn through a row-strided view, in place
+    assert ic_core.draw_overlay(crop)
+    assert np.array_equal(crop, cv2.imread(str(tmp_path / "out.png")))
+    assert tuple(crop[240, 320 + 25]) == (0, 0, 255) and np.all(view[:10] == 7)
+    small = np.zeros((50, 60, 3), np.uint8)
+    assert not ic_core.draw_overlay(small) and not small.any()
+
+
+@pytest.fixture(scope="module")
+def overlapping_views(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("ic_core")
+    scene = textured_scene(900, 400, 1)
+    views = {"left": scene[:, :500], "right": scene[:, 300:800]}  # 200 px overlap
+    for name, view in views.items():
+        assert cv2.imwrite(str(folder / f"{name}.png"), view)
+    return folder, views
+
+
+def test_match_pair_equals_cpp(overlapping_views):
+    folder, views = overlapping_views
+    cpp = run_ic_reference("--match", folder / "left.png", folder / "right.png")
+    pair = ic_core.match_pair(views["left"], views["right"])
+    assert pair.ok and pair.inliers >= 25
+    assert pair_fields(pair) == cpp
+    # B's pixel (0, 0) lies 300 px right of A's
+    x, y = ic_core.apply_homography(pair.homography, (0.0, 0.0))
+    assert (x, y) == pytest.approx((300.0, 0.0), abs=0.5)
+    grey = ic_core.match_pair(cv2.cvtColor(views["left"], cv2.COLOR_BGR2GRAY), views["right"])
+    assert grey.ok
+    blank = ic_core.match_pair(views["left"], np.full((400, 500, 3), 90, np.uint8))
+    assert not blank.ok and "blank" in blank.error
+
+
+def test_stitch_pair_equals_cpp(overlapping_views, tmp_path):
+    folder, views = overlapping_views
+    panorama = tmp_path / "p.png"
+    cpp = run_ic_reference("--stitch", folder / "left.png", folder / "right.png", panorama)
+    result = ic_core.stitch_pair(views["left"], views["right"])
+    assert result.ok and list(result.origin_of_first) == cpp["origin_of_first"]
+    assert [pair_fields(p) for p in result.pairs] == cpp["pairs"]
+    assert np.array_equal(result.panorama, cv2.imread(str(panorama)))
+    assert result.panorama.shape[1] == pytest.approx(800, abs=2)
+
+
+def test_stitch_by_rotation_equals_cpp(tmp_path):
+    cylinder = textured_scene(1500, 700, 2)
+    f = 320.0 / math.tan(math.radians(30.0))
+    u, v = np.meshgrid(np.arange(640, dtype=np.float64), np.arange(480, dtype=np.float64))
+    x, y = (u - 320.0) / f, (v - 240.0) / f
+    images, args = [], []
+    for i, yaw in enumerate((0.3, 0.0, -0.3)):
+        wx, wz = math.cos(yaw) * x - math.sin(yaw), math.sin(yaw) * x + math.cos(yaw)
+        map_x = (f * np.arctan2(wx, wz) + 750.0).astype(np.float32)
+        map_y = (f * y / np.hypot(wx, wz) + 350.0).astype(np.float32)
+        images.append(cv2.remap(cylinder, map_x, map_y, cv2.INTER_LINEAR))
+        assert cv2.imwrite(str(tmp_path / f"turn{i}.png"), images[-1])
+        args += [repr(yaw), tmp_path / f"turn{i}.png"]
+    camera = ic_core.TurningCamera(fx=f, fy=f, cx=320.0, cy=240.0)
+    cpp = run_ic_reference("--rotation", f, f, 320.0, 240.0, 0.0, tmp_path / "p.png", *args)
+    result = ic_core.stitch_by_rotation(images, [0.3, 0.0, -0.3], camera)
+    assert result.ok and cpp["error"] == ""
+    assert list(result.origin_of_first) == cpp["origin_of_first"]
+    assert np.array_equal(result.panorama, cv2.imread(str(tmp_path / "p.png")))
+
+
 # ---- configs and bad input ---------------------------------------------------------------------
 
 
@@ -309,6 +585,15 @@ def bad_camera():
         (lambda: core.BeaconControllerConfig(camera=bad_camera()), "camera.fx must be > 0, got -1"),
         (lambda: core.LineDetectorConfig(min_pixels=0), "min_pixels must be >= 1, got 0"),
         (lambda: core.VelocityLimiterConfig(max_linear=0.0), "max_linear must be > 0, got 0"),
+        (lambda: core.SteeringConfig(pd=core.PdConfig(kp=-1.0)), "kp must be >= 0, got -1"),
+        (lambda: core.SteeringConfig(mode="path", min_linear=0.5),
+         "min_linear (0.5) must be <= max_linear (0.3)"),
+        (lambda: core.SignDetectorConfig(image_path="sign.png", width_m=0.0),
+         "width_m must be > 0, got 0"),
+        (lambda: core.ParkingServoConfig(gain=-1.0), "gain must be > 0, got -1"),
+        (lambda: ic_core.OverlayConfig(radius_px=0), "radius_px must be > 0, got 0"),
+        (lambda: ic_core.MatchOptions(ratio=1.5), "ratio must be in (0, 1]"),
+        (lambda: ic_core.TurningCamera(fx=0.0), "fx must be > 0"),
     ],
 )  # fmt: skip
 def test_bad_configs_raise_value_error_with_the_cpp_message(make, message):
@@ -330,6 +615,14 @@ def test_detectors_validate_configs_changed_after_construction():
         core.LineDetectorConfig(min_pixel=3)
     with pytest.raises(ValueError, match="mode: unknown value 'follow'"):
         core.BeaconControllerConfig(mode="follow")
+    with pytest.raises(ValueError, match="mode: unknown value 'lectures'"):
+        core.SteeringConfig(mode="lectures")
+    with pytest.raises(ValueError, match="cannot read the sign image '/nonexistent.png'"):
+        core.SignDetector(core.SignDetectorConfig(image_path="/nonexistent.png", width_m=0.4))
+    overlay = ic_core.OverlayConfig()
+    overlay.thickness_px = 0
+    with pytest.raises(ValueError, match="thickness_px must be > 0, got 0"):
+        ic_core.draw_overlay(np.zeros((100, 100, 3), np.uint8), overlay)
 
 
 @pytest.mark.parametrize(
@@ -366,10 +659,13 @@ def test_bad_grey_frames_raise_and_empty_frames_are_reported():
 
 def test_imports_with_debians_python():
     out = subprocess.run(
-        ["/usr/bin/python3", "-c", "from follow_bot import core; print(core.LineDetectorConfig())"],
+        ["/usr/bin/python3", "-c", "from follow_bot import core; from image_converter import "
+         "core as ic; print(core.LineDetectorConfig(), ic.OverlayConfig())"],
         capture_output=True, text=True, check=True, timeout=60,
     )  # fmt: skip
     assert out.stdout.startswith("LineDetectorConfig(lower=HsvColor(h=20, s=100, v=100)")
+    overlay = "OverlayConfig(radius_px=25, thickness_px=2, min_image_size=50)"
+    assert out.stdout.rstrip().endswith(overlay)
 
 
 def test_the_readme_example_runs_with_debians_python():

@@ -1,23 +1,12 @@
-// follow_bot.core: the ROS-free C++ cores from Python, with no logic of their own.
-//
-// Conventions (follow_bot/README.md, "From Python"):
-//  * frames are numpy uint8 arrays, HxWx3 BGR or HxW grey; the C++ code reads them in place
-//    through a cv::Mat header (rows may be strided, e.g. a crop `frame[200:, 100:540]`; pixels
-//    within a row must be packed). Anything else raises TypeError (dtype) or ValueError (shape,
-//    layout) before C++ sees it;
-//  * configs are classes with the C++ field names, built from keyword arguments and checked by
-//    the C++ validate(): a bad value raises ValueError with its message. So do the detectors'
-//    and controllers' constructors, which run the same validate();
-//  * results are classes with the C++ field names and units; points are tuples, rectangles
-//    (x, y, width, height), contours, corners and rotations numpy arrays;
-//  * C++ camelCase methods are snake_case here (frameArrived -> frame_arrived).
+// follow_bot.core: the ROS-free C++ cores from Python, with no logic of their own. The
+// conventions (frames, configs, results) are image_converter/pybind_support.h's; the detectors'
+// and controllers' constructors run the same validate() as the configs.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include <array>
-#include <cstdint>
-#include <cstring>
+#include <memory>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -29,9 +18,16 @@
 #include "follow_bot/colour_blobs.h"
 #include "follow_bot/frame_watchdog.h"
 #include "follow_bot/ground_projection.h"
+#include "follow_bot/line_controller.h"
 #include "follow_bot/line_detector.h"
+#include "follow_bot/line_path.h"
+#include "follow_bot/marker_target.h"
+#include "follow_bot/parking_servo.h"
+#include "follow_bot/sign_detector.h"
+#include "follow_bot/steering_law.h"
 #include "follow_bot/tag_detector.h"
 #include "follow_bot/velocity_limiter.h"
+#include "image_converter/pybind_support.h"
 
 namespace py = pybind11;
 using namespace py::literals;
@@ -39,135 +35,16 @@ using namespace py::literals;
 namespace follow_bot {
 namespace {
 
-// ---- numpy <-> cv::Mat ---------------------------------------------------------------------
+using namespace pybind_support;
 
-std::string shapeOf(const py::array& array) {
-  return py::str(py::tuple(array.attr("shape"))).cast<std::string>();
-}
-
-// A cv::Mat header over the pixels of `frame` (no copy): an HxW (channels 1; HxWx1 too) or
-// HxWxC uint8 array whose pixels are packed within each row.
-cv::Mat matView(const py::handle& object, int channels, bool writable = false) {
-  const char* expected = channels == 3 ? "an HxWx3 uint8 BGR array" : "an HxW uint8 grey array";
-  // A plain isinstance check: the py::array argument caster would convert any sequence first.
-  if (!py::isinstance<py::array>(object)) {
-    throw py::type_error(std::string("expected ") + expected + " (numpy), got " +
-                         py::type::of(object).attr("__name__").cast<std::string>());
+// A read-only 2-D view of `array`, which must be rows x cols (ValueError naming `name` otherwise).
+py::detail::unchecked_reference<double, 2> fixedShape(const py::array_t<double>& array, int rows,
+                                                      int cols, const char* name) {
+  if (array.ndim() != 2 || array.shape(0) != rows || array.shape(1) != cols) {
+    throw py::value_error(std::string(name) + " must be " + std::to_string(rows) + "x" +
+                          std::to_string(cols) + ", got shape " + shapeOf(array));
   }
-  const auto frame = py::reinterpret_borrow<py::array>(object);
-  if (frame.dtype().kind() != 'u' || frame.dtype().itemsize() != 1) {
-    throw py::type_error(std::string("expected ") + expected + ", got dtype " +
-                         py::str(frame.dtype()).cast<std::string>());
-  }
-  const bool grey_shape =
-      channels == 1 && (frame.ndim() == 2 || (frame.ndim() == 3 && frame.shape(2) == 1));
-  const bool colour_shape = channels == 3 && frame.ndim() == 3 && frame.shape(2) == 3;
-  if (!grey_shape && !colour_shape) {
-    throw py::value_error(std::string("expected ") + expected + ", got shape " + shapeOf(frame));
-  }
-  const auto rows = frame.shape(0);
-  const auto cols = frame.shape(1);
-  if (rows == 0 || cols == 0) return cv::Mat();  // the C++ core reports an empty frame itself
-  const bool packed = (frame.ndim() == 2 || frame.strides(2) == 1) &&
-                      frame.strides(1) == channels && frame.strides(0) >= cols * channels;
-  if (!packed) {
-    throw py::value_error(std::string("expected ") + expected +
-                          " with packed rows (pixels next to each other, rows top to bottom), got "
-                          "strides " +
-                          py::str(py::tuple(frame.attr("strides"))).cast<std::string>() +
-                          "; pass numpy.ascontiguousarray(frame)");
-  }
-  if (writable && !frame.writeable()) throw py::value_error("the frame array is read-only");
-  // cv::Mat takes a non-const pointer; the const uses of this view never write through it.
-  auto* data = static_cast<unsigned char*>(const_cast<void*>(frame.data()));
-  return cv::Mat(static_cast<int>(rows), static_cast<int>(cols), CV_8UC(channels), data,
-                 static_cast<size_t>(frame.strides(0)));
-}
-
-// A new numpy array holding a copy of a CV_8UC1 or CV_8UC3 image (empty: shape (0, 0)).
-py::array_t<std::uint8_t> toArray(const cv::Mat& image) {
-  std::vector<py::ssize_t> shape{image.rows, image.cols};
-  if (image.channels() > 1) shape.push_back(image.channels());
-  py::array_t<std::uint8_t> out(shape);
-  const size_t row_bytes = static_cast<size_t>(image.cols) * image.elemSize();
-  for (int y = 0; y < image.rows; ++y) {
-    std::memcpy(out.mutable_data(y), image.ptr(y), row_bytes);
-  }
-  return out;
-}
-
-// ---- configs and results -------------------------------------------------------------------
-
-// "Name(field=value, ...)" over the class's attributes (its properties, in definition order).
-std::string reprFields(const py::object& self) {
-  const py::object type = py::type::of(self);
-  const py::object property = py::module_::import("builtins").attr("property");
-  std::string text = type.attr("__name__").cast<std::string>() + "(";
-  bool first = true;
-  for (const auto item : type.attr("__dict__").cast<py::dict>()) {
-    if (!py::isinstance(item.second, property)) continue;
-    const auto name = item.first.cast<std::string>();
-    text +=
-        (first ? "" : ", ") + name + "=" + py::repr(self.attr(name.c_str())).cast<std::string>();
-    first = false;
-  }
-  return text + ")";
-}
-
-template <class T>
-using Validator = std::string (*)(const T&);
-
-// A keyword constructor Config(field=value, ...): every other field keeps its C++ default, an
-// unknown keyword raises TypeError, and the result must pass the C++ validate() (ValueError
-// with its message otherwise). Also adds validate() (the message, "" when fine) and __repr__.
-template <class T>
-void defKeywordInit(py::class_<T>& cls, Validator<T> validator = nullptr) {
-  cls.def(py::init([validator](const py::kwargs& fields) {
-            py::object object = py::cast(T());
-            const py::object type = py::type::of(object);
-            const py::object property = py::module_::import("builtins").attr("property");
-            for (const auto item : fields) {
-              const auto name = item.first.cast<std::string>();
-              const py::object attribute = py::getattr(type, name.c_str(), py::none());
-              if (!py::isinstance(attribute, property)) {
-                throw py::type_error(type.attr("__name__").cast<std::string>() +
-                                     "() got an unexpected keyword argument '" + name + "'");
-              }
-              py::setattr(object, name.c_str(), item.second);
-            }
-            T config = object.cast<T>();
-            if (validator) {
-              const std::string error = validator(config);
-              if (!error.empty()) throw py::value_error(error);
-            }
-            return config;
-          }),
-          "Keyword arguments set fields by name; the rest keep their C++ defaults.");
-  if (validator) {
-    cls.def(
-        "validate", [validator](const T& config) { return validator(config); },
-        "The C++ validate(): '' when usable, else a message naming the first bad field.");
-  }
-  cls.def("__repr__", &reprFields);
-}
-
-template <class T>
-void defRepr(py::class_<T>& cls) {
-  cls.def("__repr__", &reprFields);
-}
-
-py::tuple pointTuple(const cv::Point2d& point) { return py::make_tuple(point.x, point.y); }
-
-cv::Point2d pointFrom(const std::pair<double, double>& xy) { return {xy.first, xy.second}; }
-
-// A 2-D float64 array copy of a small fixed matrix.
-template <int Rows, int Cols>
-py::array_t<double> matrixArray(const cv::Matx<double, Rows, Cols>& m) {
-  py::array_t<double> out({Rows, Cols});
-  for (int r = 0; r < Rows; ++r) {
-    for (int c = 0; c < Cols; ++c) *out.mutable_data(r, c) = m(r, c);
-  }
-  return out;
+  return array.unchecked<2>();
 }
 
 // ---- bindings --------------------------------------------------------------------------------
@@ -241,25 +118,25 @@ void bindLineDetector(py::module_& m) {
   defKeywordInit(config, static_cast<Validator<LineDetectorConfig>>(&validate));
 
   py::class_<BandMeasurement> measurement(m, "BandMeasurement");
-  measurement.def_readonly("found", &BandMeasurement::found)
-      .def_readonly("pixel_count", &BandMeasurement::pixel_count)
-      .def_readonly("centroid_x", &BandMeasurement::centroid_x)
-      .def_readonly("centroid_y", &BandMeasurement::centroid_y)
-      .def_readonly("error_px", &BandMeasurement::error_px)
-      .def_readonly("error_normalised", &BandMeasurement::error_normalised)
-      .def_readonly("confidence", &BandMeasurement::confidence)
-      .def_readonly("row_begin", &BandMeasurement::row_begin)
-      .def_readonly("row_end", &BandMeasurement::row_end);
-  defRepr(measurement);
+  measurement.def_readwrite("found", &BandMeasurement::found)
+      .def_readwrite("pixel_count", &BandMeasurement::pixel_count)
+      .def_readwrite("centroid_x", &BandMeasurement::centroid_x)
+      .def_readwrite("centroid_y", &BandMeasurement::centroid_y)
+      .def_readwrite("error_px", &BandMeasurement::error_px)
+      .def_readwrite("error_normalised", &BandMeasurement::error_normalised)
+      .def_readwrite("confidence", &BandMeasurement::confidence)
+      .def_readwrite("row_begin", &BandMeasurement::row_begin)
+      .def_readwrite("row_end", &BandMeasurement::row_end);
+  defKeywordInit(measurement);
 
   py::class_<LineMeasurement> line(m, "LineMeasurement");
-  line.def_readonly("error", &LineMeasurement::error)
-      .def_readonly("image_width", &LineMeasurement::image_width)
-      .def_readonly("image_height", &LineMeasurement::image_height)
-      .def_readonly("band", &LineMeasurement::band)
-      .def_readonly("look_ahead", &LineMeasurement::look_ahead)
+  line.def_readwrite("error", &LineMeasurement::error)
+      .def_readwrite("image_width", &LineMeasurement::image_width)
+      .def_readwrite("image_height", &LineMeasurement::image_height)
+      .def_readwrite("band", &LineMeasurement::band)
+      .def_readwrite("look_ahead", &LineMeasurement::look_ahead)
       .def_property_readonly("ok", &LineMeasurement::ok);
-  defRepr(line);
+  defKeywordInit(line);
 
   py::class_<LineDetector>(m, "LineDetector",
                            "The follower's floor-line detector: the lecture's HSV band centroid.")
@@ -408,37 +285,6 @@ void bindGeometry(py::module_& m) {
   defKeywordInit(camera, static_cast<Validator<CameraGeometry>>(&validate));
 }
 
-// An enum whose values are the C++ names' ROS spellings; E("name") parses one.
-template <class E>
-void defStringInit(py::enum_<E>& cls, std::optional<E> (*parse)(const std::string&)) {
-  cls.def(py::init([parse](const std::string& name) {
-    const std::optional<E> value = parse(name);
-    if (!value) throw py::value_error("unknown value '" + name + "'");
-    return *value;
-  }));
-}
-
-// A config field of enum type E that also takes the value's name: a str is parsed (ValueError
-// naming the field for an unknown one), anything else must be an E.
-template <class Config, class E>
-void defEnumField(py::class_<Config>& cls, const char* name, E Config::*field,
-                  std::optional<E> (*parse)(const std::string&)) {
-  const std::string field_name = name;
-  cls.def_property(
-      name, [field](const Config& config) { return config.*field; },
-      [field, parse, field_name](Config& config, const py::object& value) {
-        if (!py::isinstance<py::str>(value)) {
-          config.*field = value.cast<E>();
-          return;
-        }
-        const std::optional<E> parsed = parse(value.cast<std::string>());
-        if (!parsed) {
-          throw py::value_error(field_name + ": unknown value '" + value.cast<std::string>() + "'");
-        }
-        config.*field = *parsed;
-      });
-}
-
 void bindBeaconController(py::module_& m) {
   py::enum_<BeaconShape> shape(m, "BeaconShape");
   shape.value("sphere", BeaconShape::kSphere).value("box", BeaconShape::kBox);
@@ -528,8 +374,8 @@ void bindTagDetector(py::module_& m) {
   py::class_<MarkerObservation> observation(
       m, "MarkerObservation",
       "A marker's pose in the camera optical frame (x right, y down, z forward), metres.");
-  observation.def_readonly("id", &MarkerObservation::id)
-      .def_property_readonly(
+  observation.def_readwrite("id", &MarkerObservation::id)
+      .def_property(
           "corners",
           [](const MarkerObservation& o) {
             py::array_t<double> out({4, 2});
@@ -539,16 +385,28 @@ void bindTagDetector(py::module_& m) {
             }
             return out;
           },
+          [](MarkerObservation& o, const py::array_t<double, py::array::forcecast>& corners) {
+            const auto c = fixedShape(corners, 4, 2, "corners");
+            for (int i = 0; i < 4; ++i) o.corners[i] = {c(i, 0), c(i, 1)};
+          },
           "4x2 px: TL, TR, BR, BL seen from the front")
-      .def_property_readonly(
-          "rotation", [](const MarkerObservation& o) { return matrixArray(o.rotation); }, "3x3")
-      .def_property_readonly(
+      .def_property(
+          "rotation", [](const MarkerObservation& o) { return matrixArray(o.rotation); },
+          [](MarkerObservation& o, const py::array_t<double, py::array::forcecast>& rotation) {
+            const auto r = fixedShape(rotation, 3, 3, "rotation");
+            for (int i = 0; i < 9; ++i) o.rotation(i / 3, i % 3) = r(i / 3, i % 3);
+          },
+          "3x3")
+      .def_property(
           "translation",
           [](const MarkerObservation& o) { return py::array_t<double>(3, o.translation.val); },
+          [](MarkerObservation& o, const std::array<double, 3>& t) {
+            o.translation = {t[0], t[1], t[2]};
+          },
           "the marker centre, (3,)")
-      .def_readonly("reprojection_error_px", &MarkerObservation::reprojection_error_px)
-      .def_readonly("quality", &MarkerObservation::quality);
-  defRepr(observation);
+      .def_readwrite("reprojection_error_px", &MarkerObservation::reprojection_error_px)
+      .def_readwrite("quality", &MarkerObservation::quality);
+  defKeywordInit(observation);
 
   py::class_<TagDetector>(
       m, "TagDetector",
@@ -567,6 +425,223 @@ void bindTagDetector(py::module_& m) {
           "config", [](const TagDetector& d) { return d.config(); }, "A copy of the config.");
 }
 
+void bindSteering(py::module_& m) {
+  py::enum_<SteeringMode> mode(m, "SteeringMode");
+  mode.value("lecture", SteeringMode::kLecture)
+      .value("pd", SteeringMode::kPD)
+      .value("path", SteeringMode::kPath);
+  defStringInit(mode, &parseSteeringMode);
+
+  py::enum_<LineState>(m, "LineState")
+      .value("FOLLOWING", LineState::kFollowing)
+      .value("LOST", LineState::kLost)
+      .value("SEARCHING", LineState::kSearching)
+      .value("GAVE_UP", LineState::kGaveUp);
+
+  py::class_<PdConfig> pd(m, "PdConfig", "pd's steering and speed taper.");
+  pd.def_readwrite("kp", &PdConfig::kp)
+      .def_readwrite("kd", &PdConfig::kd)
+      .def_readwrite("max_derivative_dt", &PdConfig::max_derivative_dt)
+      .def_readwrite("look_ahead_weight", &PdConfig::look_ahead_weight)
+      .def_readwrite("taper", &PdConfig::taper)
+      .def_readwrite("curvature_taper", &PdConfig::curvature_taper);
+  defKeywordInit(pd);
+
+  py::class_<LineSearchConfig> search(m, "LineSearchConfig",
+                                      "The lost-line search, timed from the last sighting.");
+  search.def_readwrite("lost_grace", &LineSearchConfig::lost_grace)
+      .def_readwrite("lost_linear", &LineSearchConfig::lost_linear)
+      .def_readwrite("lost_angular", &LineSearchConfig::lost_angular)
+      .def_readwrite("search_rate", &LineSearchConfig::search_rate)
+      .def_readwrite("search_timeout", &LineSearchConfig::search_timeout);
+  defKeywordInit(search);
+
+  py::class_<PathConfig> path(m, "PathConfig", "path's tracking law and line memory.");
+  path.def_readwrite("heading_gain", &PathConfig::heading_gain)
+      .def_readwrite("lateral_gain", &PathConfig::lateral_gain)
+      .def_readwrite("fit_length", &PathConfig::fit_length)
+      .def_readwrite("max_extrapolation", &PathConfig::max_extrapolation)
+      .def_readwrite("start_lookahead", &PathConfig::start_lookahead)
+      .def_readwrite("keep_behind", &PathConfig::keep_behind)
+      .def_readwrite("max_point_age", &PathConfig::max_point_age)
+      .def_readwrite("max_points", &PathConfig::max_points)
+      .def_readwrite("min_point_spacing", &PathConfig::min_point_spacing)
+      .def_readwrite("max_frame_gap", &PathConfig::max_frame_gap);
+  defKeywordInit(path);
+
+  py::class_<SteeringConfig> config(m, "SteeringConfig",
+                                    "One configuration of the three laws, one set of limits.");
+  defEnumField(config, "mode", &SteeringConfig::mode, &parseSteeringMode);
+  config.def_readwrite("max_linear", &SteeringConfig::max_linear)
+      .def_readwrite("min_linear", &SteeringConfig::min_linear)
+      .def_readwrite("max_angular", &SteeringConfig::max_angular)
+      .def_readwrite("min_confidence", &SteeringConfig::min_confidence)
+      .def_readwrite("pd", &SteeringConfig::pd)
+      .def_readwrite("search", &SteeringConfig::search)
+      .def_readwrite("path", &SteeringConfig::path);
+  defKeywordInit(config, static_cast<Validator<SteeringConfig>>(&validate));
+
+  py::class_<LineObservation> observation(
+      m, "LineObservation",
+      "One frame as a steering law sees it: the measurement, its stamp (s) and the twist applied "
+      "since the previous frame.");
+  observation.def_readwrite("measurement", &LineObservation::measurement)
+      .def_readwrite("stamp", &LineObservation::stamp)
+      .def_readwrite("applied", &LineObservation::applied);
+  defKeywordInit(observation);
+
+  py::class_<LineSearch>(m, "LineSearch", "The lost-line state machine pd and path use.")
+      .def(py::init<const LineSearchConfig&>(), "config"_a = LineSearchConfig())
+      .def("seen", &LineSearch::seen, "stamp"_a, "error"_a,
+           "The line was seen at `stamp` with normalised error `error`.")
+      .def("unseen", &LineSearch::unseen, "stamp"_a,
+           "The command for a frame at `stamp` without a sighting.")
+      .def_property_readonly("state", &LineSearch::state)
+      .def("reset", &LineSearch::reset);
+
+  py::class_<SteeringLaw>(m, "SteeringLaw",
+                          "A line measurement in, a Twist2D out; make one with make_steering_law.")
+      .def("step", &SteeringLaw::step, "frame"_a, "The command for one LineObservation.")
+      .def(
+          "step",
+          [](SteeringLaw& law, const LineMeasurement& measurement, double stamp,
+             const Twist2D& applied) {
+            return law.step({measurement, stamp, applied});
+          },
+          "measurement"_a, "stamp"_a, "applied"_a = Twist2D(),
+          "The command for one frame's measurement at `stamp` (s).")
+      .def_property_readonly("state", &SteeringLaw::state)
+      .def_property_readonly("mode", &SteeringLaw::mode)
+      .def("reset", &SteeringLaw::reset, "Forgets all history.");
+  py::class_<LectureLaw, SteeringLaw>(m, "LectureLaw").def(py::init<>());
+  py::class_<PdLaw, SteeringLaw>(m, "PdLaw")
+      .def(py::init<const SteeringConfig&>(), "config"_a = SteeringConfig());
+
+  using PathState = PathLaw::PathState;
+  py::class_<PathState> path_state(m, "PathState", "The remembered path at the base.");
+  path_state.def_readonly("valid", &PathState::valid)
+      .def_readonly("lateral", &PathState::lateral)
+      .def_readonly("heading", &PathState::heading)
+      .def_readonly("curvature", &PathState::curvature)
+      .def_readonly("points", &PathState::points);
+  defRepr(path_state);
+  py::class_<PathLaw, SteeringLaw>(m, "PathLaw")
+      .def(py::init<const SteeringConfig&, const CameraGeometry&>(), "config"_a, "camera"_a)
+      .def_property_readonly("path_state", &PathLaw::pathState)
+      .def(
+          "path_points",
+          [](const PathLaw& law) {
+            const std::vector<cv::Point2d> points = law.pathPoints();
+            py::array_t<double> out({static_cast<py::ssize_t>(points.size()), py::ssize_t{2}});
+            for (size_t i = 0; i < points.size(); ++i) {
+              *out.mutable_data(i, 0) = points[i].x;
+              *out.mutable_data(i, 1) = points[i].y;
+            }
+            return out;
+          },
+          "Nx2 m: the remembered points in base_link (x forward, y left), oldest first.");
+
+  m.def("make_steering_law", &makeSteeringLaw, "config"_a = SteeringConfig(),
+        "camera"_a = std::optional<CameraGeometry>(),
+        "The law config.mode names; path without a camera gets pd, path's own fallback.");
+}
+
+void bindSignDetector(py::module_& m) {
+  using Config = SignDetectorConfig;
+  py::class_<Config> config(m, "SignDetectorConfig");
+  config.def_readwrite("image_path", &Config::image_path)
+      .def_readwrite("width_m", &Config::width_m)
+      .def_readwrite("ratio", &Config::ratio)
+      .def_readwrite("min_inliers", &Config::min_inliers)
+      .def_readwrite("ransac_threshold_px", &Config::ransac_threshold_px)
+      .def_readwrite("max_reference_features", &Config::max_reference_features)
+      .def_readwrite("min_reference_features", &Config::min_reference_features)
+      .def_readwrite("max_image_features", &Config::max_image_features)
+      .def_readwrite("max_reprojection_error_px", &Config::max_reprojection_error_px)
+      .def_readwrite("refine_passes", &Config::refine_passes)
+      .def_readwrite("refine_iterations", &Config::refine_iterations)
+      .def_readwrite("min_correlation", &Config::min_correlation)
+      .def_readwrite("max_refine_shift_px", &Config::max_refine_shift_px)
+      .def_readwrite("ambiguity_px", &Config::ambiguity_px)
+      .def_readwrite("track", &Config::track)
+      .def_readwrite("track_features", &Config::track_features)
+      .def_readwrite("track_window_px", &Config::track_window_px)
+      .def_readwrite("track_levels", &Config::track_levels)
+      .def_readwrite("max_track_motion_px", &Config::max_track_motion_px)
+      .def_readwrite("track_refine_passes", &Config::track_refine_passes)
+      .def_readwrite("track_refine_iterations", &Config::track_refine_iterations);
+  defKeywordInit(config, static_cast<Validator<Config>>(&validate));
+
+  py::class_<SignDetector>(m, "SignDetector",
+                           "The parker's textured-sign detector (SIFT, RANSAC, ECC, IPPE) and "
+                           "tracker.")
+      .def(py::init<const Config&>(), "config"_a)
+      .def(
+          "detect",
+          [](SignDetector& detector, const py::handle& grey, const CameraGeometry& camera) {
+            const cv::Mat frame = matView(grey, 1);
+            py::gil_scoped_release unlocked;
+            return detector.detect(frame, camera);
+          },
+          "grey"_a, "camera"_a = CameraGeometry(),
+          "The sign in an HxW uint8 frame (id 0, quality = inliers), or None. Stateful: tracks "
+          "the sign from the previous frame.")
+      .def("reset", &SignDetector::reset, "Forgets the previous pose and sighting.")
+      .def_property_readonly("last_tracked", &SignDetector::lastTracked)
+      .def_property_readonly("reference_features", &SignDetector::referenceFeatures)
+      .def_property_readonly("height_m", &SignDetector::heightMetres);
+}
+
+void bindParkingServo(py::module_& m) {
+  py::enum_<ParkingState>(m, "ParkingState")
+      .value("SEARCHING", ParkingState::kSearching)
+      .value("APPROACHING", ParkingState::kApproaching)
+      .value("ALIGNING", ParkingState::kAligning)
+      .value("PARKED", ParkingState::kParked)
+      .value("LOST", ParkingState::kLost);
+
+  using Config = ParkingServoConfig;
+  py::class_<Config> config(m, "ParkingServoConfig");
+  config.def_readwrite("standoff_m", &Config::standoff_m)
+      .def_readwrite("gain", &Config::gain)
+      .def_readwrite("steer_gain", &Config::steer_gain)
+      .def_readwrite("max_bearing_rad", &Config::max_bearing_rad)
+      .def_readwrite("backoff_m", &Config::backoff_m)
+      .def_readwrite("max_linear", &Config::max_linear)
+      .def_readwrite("max_angular", &Config::max_angular)
+      .def_readwrite("search_rate", &Config::search_rate)
+      .def_readwrite("lost_timeout", &Config::lost_timeout)
+      .def_readwrite("position_tolerance", &Config::position_tolerance)
+      .def_readwrite("lateral_tolerance", &Config::lateral_tolerance)
+      .def_readwrite("heading_tolerance_rad", &Config::heading_tolerance_rad)
+      .def_readwrite("linear_tolerance", &Config::linear_tolerance)
+      .def_readwrite("angular_tolerance", &Config::angular_tolerance)
+      .def_readwrite("camera", &Config::camera);
+  defKeywordInit(config, static_cast<Validator<Config>>(&validate));
+
+  py::class_<ParkingError> error(m, "ParkingError",
+                                 "The marker's pose as the robot needs it, base_link, m and rad.");
+  error.def_readonly("along", &ParkingError::along)
+      .def_readonly("lateral", &ParkingError::lateral)
+      .def_readonly("heading", &ParkingError::heading)
+      .def_readonly("phi", &ParkingError::phi)
+      .def_readonly("bearing", &ParkingError::bearing);
+  defRepr(error);
+  m.def("parking_error", &parkingError, "marker"_a, "camera"_a);
+
+  py::class_<ParkingServo>(m, "ParkingServo",
+                           "Parks square in front of a marker (ViSP's unicycle servo).")
+      .def(py::init<const Config&>(), "config"_a = Config())
+      .def("update", &ParkingServo::update, "marker"_a, "time_s"_a,
+           "The desired Twist2D for one frame; marker None when not seen.")
+      .def("set_intrinsics", &ParkingServo::setIntrinsics, "camera"_a,
+           "Takes fx, fy, cx, cy of `camera`; the mounting stays.")
+      .def_property_readonly("state", &ParkingServo::state)
+      .def_property_readonly("last_error", &ParkingServo::lastError)
+      .def_property_readonly(
+          "config", [](const ParkingServo& s) { return s.config(); }, "A copy of the config.");
+}
+
 }  // namespace
 }  // namespace follow_bot
 
@@ -579,4 +654,7 @@ PYBIND11_MODULE(core, m) {
   follow_bot::bindColourBlobs(m);
   follow_bot::bindBeaconController(m);
   follow_bot::bindTagDetector(m);
+  follow_bot::bindSteering(m);
+  follow_bot::bindSignDetector(m);
+  follow_bot::bindParkingServo(m);
 }

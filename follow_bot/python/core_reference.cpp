@@ -1,10 +1,14 @@
-// The C++ side of tests/test_python_core.py: runs a default-configured LineDetector or
-// ColourBlobDetector over image files and prints one JSON line per frame with every result
-// field, doubles at 17 significant digits (exact), so the test can compare follow_bot.core's
-// results with the C++ library's bit for bit.
+// The C++ side of tests/test_python_core.py: runs a default-configured LineDetector,
+// ColourBlobDetector, steering law (on the LineDetector's measurements) or parking servo (on a
+// TagDetector's observations) over image files in order and prints one JSON line per frame with
+// every result field, doubles at 17 significant digits (exact), so the test can compare
+// follow_bot.core's results with the C++ library's.
 //
 //   core_reference (--line | --blobs) FRAME...
+//   core_reference --steer (lecture | pd | path) FRAME...
+//   core_reference --park TAG_SIZE TAG_ID TAG_FAMILY FRAME...
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -13,13 +17,24 @@
 
 #include "follow_bot/colour_blobs.h"
 #include "follow_bot/line_detector.h"
+#include "follow_bot/parking_servo.h"
+#include "follow_bot/steering_law.h"
+#include "follow_bot/tag_detector.h"
 
 namespace {
 
 constexpr const char* kUsage =
-    "usage: core_reference (--line | --blobs) FRAME...\n\n"
-    "Runs the default LineDetector (--line) or ColourBlobDetector (--blobs) on each BGR image\n"
-    "file and prints one JSON line per frame with every result field (doubles exact).\n";
+    "usage: core_reference (--line | --blobs) FRAME...\n"
+    "       core_reference --steer (lecture | pd | path) FRAME...\n"
+    "       core_reference --park TAG_SIZE TAG_ID TAG_FAMILY FRAME...\n\n"
+    "Runs the default LineDetector (--line), ColourBlobDetector (--blobs), the steering law of\n"
+    "that mode on the LineDetector's measurements (--steer; frames 1/30 s apart, each applying\n"
+    "the previous command) or the ParkingServo on a TagDetector's poses (--park; default camera,\n"
+    "frames 1/30 s apart) on each image file in order and prints one JSON line per frame with\n"
+    "every result field (doubles exact).\n";
+
+// Frames are this far apart (s) in --steer and --park.
+constexpr double kFramePeriod = 1.0 / 30.0;
 
 void printBand(const char* name, const follow_bot::BandMeasurement& band) {
   std::printf(
@@ -57,6 +72,68 @@ void printBlobs(const follow_bot::BlobResult& result) {
   std::printf("]");
 }
 
+void printTwist(const follow_bot::Twist2D& twist) {
+  std::printf("\"linear\": %.17g, \"angular\": %.17g", twist.linear, twist.angular);
+}
+
+// --steer MODE FRAME...: one law over the frames, as the follower drives it.
+int steer(int argc, char** argv) {
+  follow_bot::SteeringConfig config;
+  const auto mode = follow_bot::parseSteeringMode(argv[2]);
+  if (!mode) {
+    std::cerr << "core_reference: unknown steering mode '" << argv[2] << "'\n" << kUsage;
+    return 2;
+  }
+  config.mode = *mode;
+  const auto law = follow_bot::makeSteeringLaw(config, follow_bot::CameraGeometry());
+  const follow_bot::LineDetector detector;
+  follow_bot::Twist2D applied;
+  for (int i = 3; i < argc; ++i) {
+    const cv::Mat frame = cv::imread(argv[i], cv::IMREAD_COLOR);
+    if (frame.empty()) {
+      std::cerr << "core_reference: cannot read frame '" << argv[i] << "'\n";
+      return 1;
+    }
+    applied = law->step({detector.detect(frame), (i - 3) * kFramePeriod, applied});
+    std::printf("{\"frame\": \"%s\", ", argv[i]);
+    printTwist(applied);
+    std::printf(", \"state\": \"%s\"}\n", follow_bot::toString(law->state()));
+  }
+  return 0;
+}
+
+// --park SIZE ID FAMILY FRAME...: the parker's servo on the tag's poses.
+int park(int argc, char** argv) {
+  follow_bot::TagDetectorConfig tag;
+  tag.size_m = std::stod(argv[2]);
+  tag.id = std::stoi(argv[3]);
+  tag.family = argv[4];
+  follow_bot::TagDetector detector(tag);
+  const follow_bot::CameraGeometry camera;
+  follow_bot::ParkingServo servo{follow_bot::ParkingServoConfig()};
+  for (int i = 5; i < argc; ++i) {
+    const cv::Mat frame = cv::imread(argv[i], cv::IMREAD_GRAYSCALE);
+    if (frame.empty()) {
+      std::cerr << "core_reference: cannot read frame '" << argv[i] << "'\n";
+      return 1;
+    }
+    const follow_bot::Twist2D twist =
+        servo.update(detector.detect(frame, camera), (i - 5) * kFramePeriod);
+    std::printf("{\"frame\": \"%s\", ", argv[i]);
+    printTwist(twist);
+    std::printf(", \"state\": \"%s\", \"error\": ", follow_bot::toString(servo.state()));
+    if (const auto& e = servo.lastError()) {
+      std::printf(
+          "{\"along\": %.17g, \"lateral\": %.17g, \"heading\": %.17g, \"phi\": %.17g, "
+          "\"bearing\": %.17g}}\n",
+          e->along, e->lateral, e->heading, e->phi, e->bearing);
+    } else {
+      std::printf("null}\n");
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -64,10 +141,14 @@ int main(int argc, char** argv) {
     std::cout << kUsage;
     return 0;
   }
+  if (argc >= 4 && !std::strcmp(argv[1], "--steer")) return steer(argc, argv);
+  if (argc >= 6 && !std::strcmp(argv[1], "--park")) return park(argc, argv);
   const bool line = argc >= 2 && !std::strcmp(argv[1], "--line");
   const bool blobs = argc >= 2 && !std::strcmp(argv[1], "--blobs");
   if (argc < 3 || (!line && !blobs)) {
-    std::cerr << "core_reference: give --line or --blobs, then at least one frame\n" << kUsage;
+    std::cerr << "core_reference: give --line, --blobs, --steer MODE or --park SIZE ID FAMILY, "
+                 "then at least one frame\n"
+              << kUsage;
     return 2;
   }
   const follow_bot::LineDetector line_detector;

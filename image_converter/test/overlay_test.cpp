@@ -55,6 +55,7 @@ TEST(Overlay, ValidatesItsConfiguration) {
   EXPECT_FALSE(isValid(OverlayConfig{0, 2, 50}));
   EXPECT_FALSE(isValid(OverlayConfig{25, 0, 50}));
   EXPECT_FALSE(isValid(OverlayConfig{25, 2, -1}));
+  EXPECT_EQ(validate(OverlayConfig{25, 0, 50}), "thickness_px must be > 0, got 0");
 }
 
 }  // namespace

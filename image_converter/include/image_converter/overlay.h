@@ -1,6 +1,8 @@
 // The lecture's overlay: a red circle at the image centre.
 #pragma once
 
+#include <string>
+
 #include <opencv2/core.hpp>
 
 namespace image_converter {
@@ -11,7 +13,10 @@ struct OverlayConfig {
   int min_image_size = 50;  // the circle is drawn only when width and height exceed this
 };
 
-// True when the configuration can be drawn (positive radius and thickness, non-negative minimum).
+// Empty when the configuration can be drawn (positive radius and thickness, non-negative
+// minimum), otherwise a message naming the first bad field.
+std::string validate(const OverlayConfig& config);
+// validate(config).empty().
 bool isValid(const OverlayConfig& config);
 
 // Draws the overlay in place on a BGR8 image. Returns false (and leaves the image untouched)

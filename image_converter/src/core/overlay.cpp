@@ -4,9 +4,19 @@
 
 namespace image_converter {
 
-bool isValid(const OverlayConfig& config) {
-  return config.radius_px > 0 && config.thickness_px > 0 && config.min_image_size >= 0;
+std::string validate(const OverlayConfig& config) {
+  if (config.radius_px <= 0)
+    return "radius_px must be > 0, got " + std::to_string(config.radius_px);
+  if (config.thickness_px <= 0) {
+    return "thickness_px must be > 0, got " + std::to_string(config.thickness_px);
+  }
+  if (config.min_image_size < 0) {
+    return "min_image_size must be >= 0, got " + std::to_string(config.min_image_size);
+  }
+  return "";
 }
+
+bool isValid(const OverlayConfig& config) { return validate(config).empty(); }
 
 bool drawOverlay(cv::Mat& bgr, const OverlayConfig& config) {
   CV_Assert(bgr.type() == CV_8UC3);
