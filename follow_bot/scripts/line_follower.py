@@ -1,0 +1,52 @@
+#!/usr/bin/env python3
+"""The Visual Servoing project's line follower in Python: crop a band of rows, HSV threshold,
+the band's moments, P control on the centroid's offset, and turn around to find the line when it
+is lost.
+
+camera/rgb/image_raw (bgr8) and camera/rgb/camera_info in; cmd_vel out while following or
+searching (one zero on giving up); ~status per frame. The crop, HSV and moments are
+follow_bot.core.LineDetector, the control a follow_bot.core steering law (the follower's code):
+~mode pd with ~kd 0 (the default) is P control with the lost-line search; lecture and path (the
+remembered line, needs camera_info) are the follower's other laws.
+"""
+
+import rospy
+from sensor_msgs.msg import CameraInfo
+
+from follow_bot import core, lab
+
+lab.start("line_follower", __doc__, {
+    "mode": "steering law: pd (default; with kd 0, P control), lecture or path",
+    "max_linear": "top speed, m/s (0.3)", "kp": "rad/s per unit of normalised error (1.5)",
+    "kd": "rad/s per unit of error per s (0: P control)",
+    "band_top_fraction": "crop: first row, as a fraction of the height (0.75)",
+    "watchdog_timeout": "s without a frame before one zero Twist (0.15)",
+})  # fmt: skip
+defaults = core.SteeringConfig()
+pd = lab.configured(core.PdConfig, {"kp": defaults.pd.kp, "kd": 0.0})
+params = {"mode": "pd", "max_linear": defaults.max_linear}
+config = lab.configured(core.SteeringConfig, params, pd=pd)
+top = core.LineDetectorConfig().band.top_fraction
+band = lab.configured(core.BandConfig, {"top_fraction": top}, prefix="band_")
+detector = core.LineDetector(lab.configured(core.LineDetectorConfig, {}, band=band))
+law = core.make_steering_law(config)  # path: pd until camera_info gives the intrinsics
+output = lab.CommandOutput()
+applied = core.Twist2D()
+
+
+def on_camera_info(info):
+    global law
+    if config.mode == core.SteeringMode.path and not isinstance(law, core.PathLaw):
+        fx, _, cx, _, fy, cy = info.K[:6]
+        law = core.make_steering_law(config, core.CameraGeometry(fx=fx, fy=fy, cx=cx, cy=cy))
+
+
+def on_frame(header, bgr):
+    global applied
+    desired = law.step(detector.detect(bgr), header.stamp.to_sec(), applied)
+    applied = output.send(header, desired, law.state != core.LineState.GAVE_UP, law.state.name)
+
+
+rospy.Subscriber("camera/rgb/camera_info", CameraInfo, on_camera_info, queue_size=1)
+lab.subscribe_frames(on_frame)
+rospy.spin()
