@@ -21,6 +21,8 @@ SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 FAMILY_SIZES = {
     "follower": 13, "dumpster": 9, "beacons_follow_green": 5, "beacons_red_stop": 4,
     "parker_tag": 15, "parker_sign": 12,
+    # The Python lab nodes (follow_bot/scripts) on their C++ twins' criteria (extends).
+    "lab_follow_green": 2, "lab_red_stop": 2, "lab_line_follower": 3,
 }  # fmt: skip
 FAMILIES = {
     family: [s.name for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")]
@@ -35,6 +37,7 @@ QUICK = {
     "beacons_red_stop/plain",
     "parker_tag/d2_off20_b60", "parker_tag/dropout", "parker_tag/hidden",
     "parker_sign/d1.2_off-20_b45",
+    "lab_follow_green/dropout", "lab_red_stop/plain", "lab_line_follower/lap_fast",
 }  # fmt: skip
 RUNS = [
     pytest.param(name, marks=() if name in QUICK else pytest.mark.full)

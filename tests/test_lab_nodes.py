@@ -1,0 +1,162 @@
+"""The display-only lab nodes (follow_bot/scripts: colour_filter.py, three_colours.py,
+colour_flags.py) on a known frame: the exact pixels of their ~image and the flags they raise.
+
+Each case starts a roscore and the node (rosrun: Debian's python3), then a child process (this
+file with --client NODE OUT, the venv's python) publishes the frame on camera/rgb/image_raw until
+the node answers, and writes what came back to OUT (.npz). The driving lab nodes are played by
+the scenario families worlds/scenarios/lab_*.yaml (tests/test_scenarios.py).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from follow_bot import core
+from harness.node_under_test import private_master, run_with_client
+
+GREY = (110, 115, 120)  # BGR floor: saturation 21, below every colour's floor
+RECTS = {  # BGR colour and (rows, columns) of each patch
+    "red": ((0, 0, 200), (slice(100, 180), slice(80, 200))),
+    "green": ((0, 200, 0), (slice(100, 180), slice(260, 380))),
+    "blue": ((200, 0, 0), (slice(300, 310), slice(400, 410))),  # 10x10: below min_area
+}
+
+
+def known_frame() -> np.ndarray:
+    frame = np.full((480, 640, 3), GREY, np.uint8)
+    for colour, (rows, cols) in RECTS.values():
+        frame[rows, cols] = colour
+    return frame
+
+
+def client(node: str, out: str) -> dict:
+    import rospy
+    from sensor_msgs.msg import Image
+    from std_msgs.msg import String
+
+    from harness.ros_image import bgr_to_msg, msg_to_bgr
+
+    rospy.init_node("lab_client", disable_signals=True)
+    got: dict = {}
+    rospy.Subscriber(f"/{node}/image", Image, lambda m: got.setdefault("image", m))
+    rospy.Subscriber(f"/{node}/flags", String, lambda m: got.setdefault("flags", m.data))
+    publisher = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1)
+    wanted = {"image", "flags"} if node == "colour_flags" else {"image"}
+    deadline = time.monotonic() + 60
+    while not wanted <= got.keys() and time.monotonic() < deadline:
+        publisher.publish(bgr_to_msg(known_frame(), rospy.Time.now(), "camera"))
+        time.sleep(0.2)
+    image = got["image"]
+    picture = msg_to_bgr(image) if image.encoding == "bgr8" else None
+    np.savez(out, image=picture)
+    return {"encoding": image.encoding, "flags": json.loads(got.get("flags", "null"))}
+
+
+def play(node: str, tmp_path) -> tuple[dict, np.ndarray]:
+    out = tmp_path / "out.npz"
+    result = run_with_client(
+        ["follow_bot", f"{node}.py"], [sys.executable, __file__, "--client", node, str(out)],
+        timeout=120,
+    )  # fmt: skip
+    assert result["encoding"] == "bgr8"
+    return result, np.load(out)["image"]
+
+
+def kept(frame: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """The frame where `mask` is set, black elsewhere (the worksheet's bitwise_and)."""
+    return np.where(mask[..., None], frame, 0).astype(np.uint8)
+
+
+def test_colour_filter_keeps_exactly_the_green_patch(tmp_path):
+    _, image = play("colour_filter", tmp_path)  # ~colour: green by default
+    frame = known_frame()
+    rows, cols = RECTS["green"][1]
+    inside = np.zeros(frame.shape[:2], bool)
+    inside[rows, cols] = True
+    assert not image[~inside].any()  # black everywhere outside the green patch
+    # Inside it, the green itself, but for the corners the mask's opening (ellipse) rounds off.
+    assert np.count_nonzero(image[inside].any(axis=1)) >= inside.sum() - 40
+    assert tuple(image[140, 320]) == (0, 200, 0) and tuple(image[100, 300]) == (0, 200, 0)
+    # Pixel for pixel the binding's own mask, as the node is built on it.
+    green = core.ColourBlobDetector().mask(frame, "green") > 0
+    assert np.array_equal(image, kept(frame, green))
+
+
+def test_three_colours_keeps_red_green_and_blue(tmp_path):
+    _, image = play("three_colours", tmp_path)
+    frame = known_frame()
+    detector = core.ColourBlobDetector()
+    union = np.zeros(frame.shape[:2], bool)
+    for name in ("red", "green", "blue"):
+        union |= detector.mask(frame, name) > 0
+    assert np.array_equal(image, kept(frame, union))
+    assert tuple(image[140, 140]) == (0, 0, 200) and tuple(image[140, 320]) == (0, 200, 0)
+    assert tuple(image[20, 20]) == (0, 0, 0)  # the grey floor is gone
+    big = np.zeros(frame.shape[:2], bool)
+    for name in ("red", "green"):
+        big[RECTS[name][1]] = True
+    assert np.count_nonzero(image[big].any(axis=1)) >= big.sum() - 80
+
+
+def test_colour_flags_raise_for_big_contours_only(tmp_path):
+    result, image = play("colour_flags", tmp_path)
+    flags = result["flags"]
+    assert (flags["red"]["flag"], flags["green"]["flag"], flags["blue"]["flag"]) == (
+        True, True, False,
+    )  # fmt: skip
+    # An 80x120 px patch: its contour through the edge pixels' centres encloses 79 x 119 px^2,
+    # less the corners the mask's opening rounds off; the centroid at its centre.
+    for name, (x, y) in (("red", (139.5, 139.5)), ("green", (319.5, 139.5))):
+        assert 79 * 119 - 40 <= flags[name]["area"] <= 79 * 119
+        assert flags[name]["centroid"] == pytest.approx([x, y], abs=0.01)
+    assert flags["blue"]["area"] <= 9 * 9  # 10x10 px: below min_area (100 px^2)
+    blobs = core.ColourBlobDetector().detect(known_frame())
+    assert {b.name: b.area for b in blobs.colours} == {n: f["area"] for n, f in flags.items()}
+    # The flagged contours drawn in white, nothing else changed.
+    changed = np.any(image != known_frame(), axis=2)
+    assert np.all(image[changed] == 255)
+    assert changed.sum() == sum(len(b.contour) for b in blobs.colours if b.found)
+
+
+def test_lab_nodes_answer_help_with_both_pythons():
+    scripts = ["colour_filter", "three_colours", "colour_flags", "follow_green_stop_red",
+               "line_follower"]  # fmt: skip
+    for python in ("/usr/bin/python3", sys.executable):
+        for script in scripts:
+            path = subprocess.run(
+                ["rospack", "find", "follow_bot"], capture_output=True, text=True, check=True
+            ).stdout.strip()
+            out = subprocess.run(
+                [python, f"{path}/scripts/{script}.py", "--help"],
+                capture_output=True, text=True, timeout=60,
+            )  # fmt: skip
+            assert out.returncode == 0, out.stderr
+            assert "private parameters:" in out.stdout and "~" in out.stdout, script
+
+
+@pytest.mark.parametrize(
+    "node, param, message",
+    [
+        ("line_follower", "_kp:=-1", "kp must be >= 0, got -1"),
+        ("line_follower", "_mode:=fast", "mode: unknown value 'fast'"),
+        ("follow_green_stop_red", "_close_area:=-1.0", "close_area must be >= 0, got -1"),
+        ("colour_filter", "_colour:=purple", "~colour must be red, green or blue, got 'purple'"),
+    ],
+)  # fmt: skip
+def test_lab_nodes_refuse_bad_params_naming_them(node, param, message):
+    with private_master() as env:
+        out = subprocess.run(
+            ["rosrun", "follow_bot", f"{node}.py", param], env=env, capture_output=True,
+            text=True, timeout=60,
+        )  # fmt: skip
+    assert out.returncode == 2 and message in out.stdout + out.stderr, out.stdout + out.stderr
+
+
+if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
+    print(json.dumps(client(sys.argv[2], sys.argv[3])))
