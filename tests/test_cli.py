@@ -14,6 +14,8 @@ TOOLS = {
     "marker_probe": ["rosrun", "follow_bot", "marker_probe"],
     "core_reference": ["rosrun", "follow_bot", "core_reference"],
     "core_call_timer": ["rosrun", "follow_bot", "core_call_timer"],
+    # "package tool" where two packages have a tool of that name
+    "image_converter core_reference": ["rosrun", "image_converter", "core_reference"],
     "sim": ["rosrun", "harness", "sim"],
     "run_scenario": ["rosrun", "harness", "run_scenario"],
 }
@@ -34,6 +36,7 @@ def run(args: list[str]) -> subprocess.CompletedProcess:
         ("marker_probe", "--help"),
         ("core_reference", "--help"),
         ("core_call_timer", "--help"),
+        ("image_converter core_reference", "--help"),
         ("sim", "--help"),
         ("run_scenario", "--help"),
     ],
@@ -41,7 +44,7 @@ def run(args: list[str]) -> subprocess.CompletedProcess:
 def test_help_prints_the_usage_and_exits_0(tool, flag):
     result = run([*TOOLS[tool], flag])
     assert result.returncode == 0, result.stderr
-    assert result.stdout.startswith(f"usage: {tool}"), result.stdout
+    assert result.stdout.startswith(f"usage: {tool.split()[-1]}"), result.stdout
     assert result.stderr == ""
 
 
@@ -56,10 +59,13 @@ def test_help_prints_the_usage_and_exits_0(tool, flag):
         ("marker_probe", ["--tag-size", "0.2"], "marker_probe: no frames given"),
         ("marker_probe", ["--tag-size", "big", "f.png"], "marker_probe: the argument ('big')"),
         ("marker_probe", ["f.png"], "give either --sign IMAGE --width W or --tag-size S"),
-        ("core_reference", ["--line"], "core_reference: give --line or --blobs, then at least"),
-        ("core_reference", ["--frob", "f.png"], "core_reference: give --line or --blobs"),
+        ("core_reference", ["--line"], "core_reference: give --line, --blobs, --steer MODE or"),
+        ("core_reference", ["--frob", "f.png"], "core_reference: give --line, --blobs"),
+        ("core_reference", ["--steer", "fast", "f.png"], "unknown steering mode 'fast'"),
+        ("image_converter core_reference", ["--match", "a.png"], "core_reference: bad arguments"),
         ("core_call_timer", ["--line"], "core_call_timer: no frames given"),
         ("core_call_timer", ["--tag", "--rounds", "0", "f.png"], "--rounds needs a count >= 1"),
+        ("core_call_timer", ["--sign"], "--sign needs the sign's IMAGE and width W (m)"),
         ("sim", ["--frob"], "sim: error: unrecognized arguments: --frob"),
         ("run_scenario", ["--frob"], "error: "),  # its prog name is the scenarios owner's
     ],
@@ -68,7 +74,7 @@ def test_bad_usage_exits_2_with_the_usage_on_stderr(tool, args, problem):
     result = run([*TOOLS[tool], *args])
     assert result.returncode == 2, result.stdout + result.stderr
     assert problem in result.stderr
-    assert "usage: " + tool in result.stderr
+    assert "usage: " + tool.split()[-1] in result.stderr
     assert result.stdout == ""
 
 
