@@ -32,17 +32,21 @@ detector = core.LineDetector(lab.configured(core.LineDetectorConfig, {}, band=ba
 law = core.make_steering_law(config)  # path: pd until camera_info gives the intrinsics
 output = lab.CommandOutput()
 applied = core.Twist2D()
+camera = []  # the intrinsics, once camera_info arrives (path mode)
 
 
 def on_camera_info(info):
-    global law
-    if config.mode == core.SteeringMode.path and not isinstance(law, core.PathLaw):
-        fx, _, cx, _, fy, cy = info.K[:6]
-        law = core.make_steering_law(config, core.CameraGeometry(fx=fx, fy=fy, cx=cx, cy=cy))
+    fx, _, cx, _, fy, cy = info.K[:6]
+    try:
+        camera[:] = [core.CameraGeometry(fx=fx, fy=fy, cx=cx, cy=cy)]
+    except ValueError as error:  # e.g. all zeros: path keeps steering as pd
+        rospy.logwarn_throttle(5.0, f"camera_info unusable: {error}")
 
 
 def on_frame(header, bgr):
-    global applied
+    global applied, law
+    if config.mode == core.SteeringMode.path and camera and not isinstance(law, core.PathLaw):
+        law = core.make_steering_law(config, camera[0])
     desired = law.step(detector.detect(bgr), header.stamp.to_sec(), applied)
     applied = output.send(header, desired, law.state != core.LineState.GAVE_UP, law.state.name)
 
