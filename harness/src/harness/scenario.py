@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from harness import scoring
+from harness.realism import parse_realism
 from harness.simulation import Perturbations
 from harness.sweep import draw, member_name, parse_sweep
 from harness.validation import (
@@ -178,7 +179,8 @@ def _parse_hidden(value: Any, where: str) -> tuple[tuple[str, float, float], ...
 
 
 def _parse_perturbations(value: Any, where: str) -> Perturbations:
-    f = Fields(value, where, {"gain", "noise_sigma", "delay_steps", "dropout", "line_gap", "hide"})
+    allowed = {"gain", "noise_sigma", "delay_steps", "dropout", "line_gap", "hide", "realism"}
+    f = Fields(value, where, allowed)
     delay = f.get("delay_steps", number(ge=0.0), None)
     if delay is not None and delay != int(delay):
         raise ScenarioError(f"{f.where('delay_steps')}: must be a whole number, got {delay!r}")
@@ -189,6 +191,7 @@ def _parse_perturbations(value: Any, where: str) -> Perturbations:
         dropouts=f.get("dropout", _parse_dropouts, ()),
         line_gaps=f.get("line_gap", _parse_gaps, ()),
         hidden=f.get("hide", _parse_hidden, ()),
+        realism=tuple(f.get("realism", parse_realism, {}).items()),
     )
 
 

@@ -18,6 +18,7 @@ import yaml
 
 from harness.camera import Camera
 from harness.geometry import Arc, Straight, densify_polyline, trace_segments, wrap_angle
+from harness.realism import Realism, parse_realism, realism_from
 from harness.validation import (
     Colour,
     Fields,
@@ -183,6 +184,7 @@ class World:
     robot: RobotConfig
     camera: Camera
     source: Path | None = None
+    realism: Realism = field(default_factory=Realism)
 
     def centreline(self, index: int = 0) -> np.ndarray:
         """Dense centreline (Nx2, metres) of floor line `index`, as drawn in the texture."""
@@ -396,11 +398,8 @@ def _parse_camera(value: Any, where: str) -> Camera:
 
 def _parse_world_document(data: Any, base_dir: Path, source: Path | None) -> World:
     base = base_dir
-    top = Fields(
-        data,
-        "",
-        {"name", "background", "ground", "objects", "lighting", "noise", "robot", "camera"},
-    )
+    sections = {"name", "background", "ground", "objects", "lighting", "noise", "robot", "camera"}
+    top = Fields(data, "", sections | {"realism"})
     raw_objects = sequence(top.data.get("objects", []), "objects")
     objects = tuple(
         _parse_object(v, join_path("objects", i), base, i) for i, v in enumerate(raw_objects)
@@ -419,6 +418,7 @@ def _parse_world_document(data: Any, base_dir: Path, source: Path | None) -> Wor
         robot=top.section("robot", _parse_robot),
         camera=top.section("camera", _parse_camera),
         source=source,
+        realism=realism_from(top.section("realism", parse_realism)),
     )
 
 
