@@ -188,3 +188,24 @@ def test_distractors_keep_clear_of_the_course_and_the_robots_way(worlds):
     assert len(posters) == REALISTIC.posters
     for poster in posters:
         assert abs(poster.pose[1] - sign.objects[0].pose[1]) >= 0.75  # beside the sign
+
+
+def test_a_scenario_sets_realism_and_lens_over_the_world(tmp_path):
+    from harness.camera import LENSES
+    from harness.scenario import parse_scenario
+    from harness.simulation import Simulation
+    from harness.world import load_world
+
+    scenario = parse_scenario(
+        {
+            "world": "course",
+            "driver": {"constant": [0.1, 0.0]},
+            "duration": 1.0,
+            "perturbations": {"realism": {"profile": "realistic"}, "lens": "turtlebot3"},
+        }
+    )
+    sim = Simulation(load_world(scenario.world_path), perturbations=scenario.perturbations)
+    assert sim.renderer.realism == REALISTIC
+    info = sim.renderer.camera.camera_info_dict()
+    assert info["D"] == list(LENSES["turtlebot3"])
+    assert sim.render().shape == (480, 640, 3)

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import cv2
 import numpy as np
 
 from harness.apriltag_image import family_geometry, tag_image
-from harness.camera import Camera
+from harness.camera import PINHOLE, Camera
 from harness.geometry import clip_polygon_near, rot_z
 from harness.realism import (
     Realism,
@@ -462,6 +463,42 @@ class _WallItem:
             _draw_board(image, view, self.corners, self.levels, exact=False)
 
 
+class _Lens:
+    """The plumb_bob lens of a camera: a pinhole view, rendered with a margin wide enough for the
+    lens's field of view, is remapped into the distorted image. Each distorted pixel takes the
+    pinhole pixel its ray passes through (cv2.undistortPoints of the pixel grid: the inverse of
+    what cv2.initUndistortRectifyMap gives, which maps rectified pixels to distorted ones)."""
+
+    def __init__(self, camera: Camera):
+        w, h = camera.width, camera.height
+        grid = np.stack(np.meshgrid(np.arange(w), np.arange(h)), axis=-1).astype(np.float64)
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+        pinhole_px = cv2.undistortPointsIter(
+            grid.reshape(-1, 1, 2), camera.K, np.array(camera.distortion), None, camera.K, criteria
+        ).reshape(h, w, 2)
+        low, high = pinhole_px.min(axis=(0, 1)), pinhole_px.max(axis=(0, 1))
+        over = max(0.0, -low[0], -low[1], high[0] - (w - 1), high[1] - (h - 1))
+        pad = math.ceil(over) + 2  # bilinear needs the neighbour too
+        # Same fx, fy and mounting, principal point moved by the margin.
+        self.pinhole = replace(
+            camera,
+            width=w + 2 * pad,
+            height=h + 2 * pad,
+            hfov=2.0 * math.atan((w / 2.0 + pad) / camera.fx),
+            distortion=PINHOLE,
+        )
+        pinhole_px += pad
+        self.maps = cv2.convertMaps(
+            pinhole_px[..., 0].astype(np.float32), pinhole_px[..., 1].astype(np.float32),
+            cv2.CV_16SC2,
+        )  # fmt: skip
+
+    def apply(self, pinhole_image: np.ndarray) -> np.ndarray:
+        return cv2.remap(
+            pinhole_image, *self.maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+        )
+
+
 class Renderer:
     """Renders BGR frames of a world from robot poses; deterministic for a given seed."""
 
@@ -480,6 +517,8 @@ class Renderer:
         """`realism` (default: the world's) adds its scene and sensor effects; distractors keep
         clear of the world's robot start, `starts` and every object; `rate_hz` times the drift."""
         self.camera = camera or world.camera
+        self._lens = _Lens(self.camera) if self.camera.distorted else None
+        self._view_camera = self._lens.pinhole if self._lens else self.camera
         lighting = world.lighting
         self.gain = lighting.gain if gain is None else gain
         self.noise_sigma = world.noise.sigma if noise_sigma is None else noise_sigma
@@ -495,7 +534,7 @@ class Renderer:
         self._tex_to_world = tex_to_world
         self._floor = tuple(min(255.0, c * self.gain) for c in world.ground.colour)
         sky = tuple(min(255.0, c * self.gain) for c in world.background)
-        self._sky = np.empty((self.camera.height, self.camera.width, 3), np.uint8)
+        self._sky = np.empty((self._view_camera.height, self._view_camera.width, 3), np.uint8)
         self._sky[:] = np.rint(sky).astype(np.uint8)
         self._light = np.array(lighting.direction)
         self._items = [self._item(obj, lighting.ambient) for obj in world.objects]
@@ -541,7 +580,7 @@ class Renderer:
         out (their baked floor shadows stay). `motion` (v, w) is the base's velocity during the
         exposure, for the realism's motion blur.
         """
-        cam = self.camera
+        cam = self._view_camera
         if frame is None:
             frame, self.frame = self.frame, self.frame + 1
         image = np.empty((cam.height, cam.width, 3), np.uint8)
@@ -567,6 +606,8 @@ class Renderer:
             for i in np.argsort(dist)[::-1]:
                 if self.world.objects[i].name not in hidden:
                     self._items[i].draw(image, view)
+        if self._lens is not None:
+            image = self._lens.apply(image)
         if self.noise_sigma > 0.0:
             rng = np.random.default_rng((self.seed, frame))
             codes = np.frombuffer(rng.bytes(image.size * 2), np.uint16).reshape(image.shape)
@@ -576,6 +617,11 @@ class Renderer:
         if self._sensor is not None:
             image = self._sensor.apply(image, frame, self.motion_flow(pose, motion))
         return image
+
+    def _lens_pixels(self, pinhole_px: np.ndarray) -> np.ndarray:
+        """Pinhole pixels where the camera's lens puts them."""
+        pixels = np.asarray(pinhole_px, dtype=float).reshape(-1, 2)
+        return self.camera.distort_pixels(pixels) if self._lens else pixels
 
     def motion_flow(self, pose: Pose, motion: tuple[float, float]) -> tuple[float, float]:
         """Image motion (du, dv) px over the exposure of the floor point seen at the centre of
@@ -608,7 +654,7 @@ class Renderer:
         out = []
         for obj, item in zip(self.world.objects, self._items, strict=False):
             c = view.to_camera(item.anchor)
-            uv = cam.project_camera(c)[0] if c[2] > 0.0 else np.array([np.nan, np.nan])
+            uv = self._lens_pixels(cam.project_camera(c))[0] if c[2] > 0.0 else np.full(2, np.nan)
             in_view = bool(c[2] > 0.0 and 0 <= uv[0] < cam.width and 0 <= uv[1] < cam.height)
             entry = {
                 "name": obj.name,
@@ -620,6 +666,7 @@ class Renderer:
             if isinstance(item, _SphereItem):
                 conic = item.silhouette(view)
                 centre = None if conic is None else np.linalg.solve(conic[:2, :2], -conic[:2, 2])
+                centre = None if centre is None else self._lens_pixels(centre)[0]
                 entry["blob_centre_px"] = None if centre is None else centre.tolist()
             elif isinstance(item, _MarkerItem):
                 corners = item.geom.corners
@@ -628,6 +675,7 @@ class Renderer:
                         obj.size / np.linalg.norm(corners[1] - corners[0])
                     )
                 pix, depth = cam.project(corners, pose)
+                pix = self._lens_pixels(pix)
                 entry["corners_px"] = pix.tolist() if np.all(depth > 0.0) else None
             out.append(entry)
         return out

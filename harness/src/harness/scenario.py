@@ -37,7 +37,15 @@ from harness.validation import (
     string,
     vector,
 )
-from harness.world import Box, Sphere, World, WorldError, load_world, resolve_world_path
+from harness.world import (
+    Box,
+    Sphere,
+    World,
+    WorldError,
+    load_world,
+    parse_distortion,
+    resolve_world_path,
+)
 
 STOP_CONDITIONS = ("duration", "lap_complete", "still")
 
@@ -179,7 +187,16 @@ def _parse_hidden(value: Any, where: str) -> tuple[tuple[str, float, float], ...
 
 
 def _parse_perturbations(value: Any, where: str) -> Perturbations:
-    allowed = {"gain", "noise_sigma", "delay_steps", "dropout", "line_gap", "hide", "realism"}
+    allowed = {
+        "gain",
+        "noise_sigma",
+        "delay_steps",
+        "dropout",
+        "line_gap",
+        "hide",
+        "realism",
+        "lens",
+    }
     f = Fields(value, where, allowed)
     delay = f.get("delay_steps", number(ge=0.0), None)
     if delay is not None and delay != int(delay):
@@ -192,6 +209,7 @@ def _parse_perturbations(value: Any, where: str) -> Perturbations:
         line_gaps=f.get("line_gap", _parse_gaps, ()),
         hidden=f.get("hide", _parse_hidden, ()),
         realism=tuple(f.get("realism", parse_realism, {}).items()),
+        lens=f.get("lens", parse_distortion, None),
     )
 
 

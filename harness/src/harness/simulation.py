@@ -35,6 +35,8 @@ class Perturbations:
     hidden: tuple[tuple[str, float, float], ...] = ()
     # Realism options laid over the world's (harness.realism; `profile` already expanded).
     realism: tuple[tuple[str, Any], ...] = ()
+    # The camera's plumb_bob lens (k1, k2, p1, p2, k3) instead of the world's; None keeps it.
+    lens: tuple[float, float, float, float, float] | None = None
 
 
 def with_line_gaps(world: World, gaps: tuple[tuple[float, float], ...]) -> World:
@@ -130,8 +132,10 @@ class Simulation:
         self.perturbations = perturbations or Perturbations()
         p = self.perturbations
         painted = with_line_gaps(world, p.line_gaps)
+        camera = world.camera if p.lens is None else replace(world.camera, distortion=p.lens)
         self.renderer = Renderer(
             painted,
+            camera,
             gain=p.gain,
             noise_sigma=p.noise_sigma,
             seed=p.noise_seed,
