@@ -209,3 +209,30 @@ def test_a_scenario_sets_realism_and_lens_over_the_world(tmp_path):
     info = sim.renderer.camera.camera_info_dict()
     assert info["D"] == list(LENSES["turtlebot3"])
     assert sim.render().shape == (480, 640, 3)
+
+
+def test_realistic_families_extend_the_clean_ones_with_their_bounds():
+    from pathlib import Path
+
+    from harness.scenario import load_scenarios
+
+    folder = Path(__file__).resolve().parents[2] / "worlds" / "realistic"
+    sizes = {
+        "follower_realistic": 15,
+        "dumpster_realistic": 2,
+        "beacons_follow_green_realistic": 1,
+        "beacons_red_stop_realistic": 1,
+        "parker_tag_realistic": 3,
+        "parker_sign_realistic": 3,
+    }
+    for family, size in sizes.items():
+        runs = load_scenarios(folder / f"{family}.yaml")
+        assert len(runs) == size, family
+        clean = load_scenarios(folder.parent / "scenarios" / f"{family[: -len('_realistic')]}.yaml")
+        for run in runs:
+            assert run.perturbations.realism, run.name
+            assert {c.metric for c in clean[0].criteria} <= {c.metric for c in run.criteria}
+    lap = load_scenarios(folder / "follower_realistic.yaml")[0]
+    assert lap.name == "follower_realistic/realistic"
+    assert dict(lap.perturbations.realism) == PROFILES["realistic"]
+    assert {c.metric: c.maximum for c in lap.criteria}["cross_track.rms"] == 0.001
