@@ -94,3 +94,46 @@ def test_marker_pose_face_on_and_turned():
     assert rotation_angle_deg(np.eye(3), rot) == pytest.approx(math.degrees(0.3))
     assert incidence_deg(rot, centre) == pytest.approx(math.degrees(0.3))
     assert rotation_angle_deg(rot, rot) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_lens_puts_a_3d_point_where_cv2_project_points_does(worlds):
+    """A small ball seen through the turtlebot3 lens: its blob lands on cv2.projectPoints' pixel
+    of its centre (the pinhole view is remapped by the inverse of the lens map)."""
+    from dataclasses import replace
+
+    import cv2
+
+    from harness.camera import LENSES
+    from harness.render import Renderer
+    from harness.world import Sphere
+
+    rgb = worlds["rgb"]
+    rgb = replace(rgb, lighting=replace(rgb.lighting, ambient=1.0))  # unshaded: weight = coverage
+    camera = replace(rgb.camera, distortion=LENSES["turtlebot3"])
+    pose = (0.0, 0.0, 0.0)
+    for position in ((1.5, 0.6, 0.55), (1.2, -0.5, 0.05), (2.0, 0.0, 0.3)):
+        ball = Sphere("dot", (255, 0, 255), 0.01, position)
+        world = replace(rgb, objects=(ball,))
+        image = Renderer(world, camera).render(pose).astype(float)
+        weight = np.clip((image[..., 0] - image[..., 1]) / 255.0, 0.0, 1.0)  # magenta: B - G
+        rows, cols = np.indices(weight.shape)
+        centroid = np.array([(weight * cols).sum(), (weight * rows).sum()]) / weight.sum()
+        r, t = camera.world_to_camera(pose)
+        expected, _ = cv2.projectPoints(
+            np.array([position], float), cv2.Rodrigues(r)[0], t, camera.K,
+            np.array(camera.distortion),
+        )  # fmt: skip
+        assert centroid == pytest.approx(expected.ravel(), abs=0.05)
+        assert camera.distort_pixels(camera.project(np.array([position]), pose)[0])[
+            0
+        ] == pytest.approx(expected.ravel(), abs=1e-9)
+
+
+def test_camera_info_carries_the_lens():
+    from harness.camera import LENSES
+
+    info = Camera(distortion=LENSES["turtlebot3"]).camera_info_dict()
+    assert info["distortion_model"] == "plumb_bob"
+    assert info["D"] == list(LENSES["turtlebot3"])
+    assert info["P"][:3] == info["K"][:3] and info["P"][3] == 0.0
+    assert info["R"] == [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]

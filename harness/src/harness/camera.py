@@ -5,7 +5,9 @@ Conventions used everywhere in the harness:
 - optical frame: x right, y down, z forward (REP-103 ``_optical`` frames).
 - pixels: (u, v) = (column, row) with pixel centres at integer coordinates, the OpenCV and
   ROS CameraInfo convention; the principal point is cx = width / 2, cy = height / 2.
-- fx = fy = (width / 2) / tan(hfov / 2), no distortion.
+- fx = fy = (width / 2) / tan(hfov / 2); an optional plumb_bob lens (k1, k2, p1, p2, k3), the
+  model of ROS CameraInfo and OpenCV, distorts the pinhole image (the renderer draws a pinhole
+  view and remaps it).
 """
 
 from __future__ import annotations
@@ -19,6 +21,10 @@ from harness.geometry import rot_z
 
 FRAME_ID = "camera_rgb_optical_frame"
 DEFAULT_HFOV = math.radians(60.0)  # Kinect-like horizontal field of view
+PINHOLE = (0.0, 0.0, 0.0, 0.0, 0.0)
+# Named plumb_bob lenses (k1, k2, p1, p2, k3). turtlebot3: the visible barrel distortion of a
+# cheap wide-angle board camera like a TurtleBot3's (straight lines bow ~12 px at the edges).
+LENSES = {"pinhole": PINHOLE, "turtlebot3": (-0.28, 0.07, 0.0, 0.0, 0.0)}
 
 
 @dataclass(frozen=True)
@@ -32,6 +38,7 @@ class Camera:
     pitch: float = 0.0  # radians, positive tilts the optical axis down towards the floor
     x_offset_m: float = 0.0  # forward of the base origin
     frame_id: str = FRAME_ID
+    distortion: tuple[float, float, float, float, float] = PINHOLE  # plumb_bob k1 k2 p1 p2 k3
 
     @property
     def fx(self) -> float:
@@ -61,12 +68,29 @@ class Camera:
             "width": self.width,
             "height": self.height,
             "distortion_model": "plumb_bob",
-            "D": [0.0] * 5,
+            "D": [float(d) for d in self.distortion],
             "K": k.ravel().tolist(),
             "R": np.eye(3).ravel().tolist(),
             "P": p.ravel().tolist(),
             "frame_id": self.frame_id,
         }
+
+    @property
+    def distorted(self) -> bool:
+        return any(self.distortion)
+
+    def distort_pixels(self, pixels: np.ndarray) -> np.ndarray:
+        """Pinhole pixels (Nx2) moved by the plumb_bob lens, as cv2.projectPoints does."""
+        k1, k2, p1, p2, k3 = self.distortion
+        x = (np.asarray(pixels, dtype=float).reshape(-1, 2) - [self.cx, self.cy]) / [
+            self.fx,
+            self.fy,
+        ]
+        r2 = (x**2).sum(axis=1)
+        radial = 1.0 + k1 * r2 + k2 * r2**2 + k3 * r2**3
+        xd = x[:, 0] * radial + 2 * p1 * x[:, 0] * x[:, 1] + p2 * (r2 + 2 * x[:, 0] ** 2)
+        yd = x[:, 1] * radial + p1 * (r2 + 2 * x[:, 1] ** 2) + 2 * p2 * x[:, 0] * x[:, 1]
+        return np.column_stack([self.fx * xd + self.cx, self.fy * yd + self.cy])
 
     def base_to_optical(self) -> np.ndarray:
         """Rotation whose columns are the optical x, y, z axes expressed in the base frame."""

@@ -8,17 +8,26 @@ per-object draws.
 
 from __future__ import annotations
 
-import functools
 import math
 import time
-from statistics import NormalDist
+from dataclasses import replace
 
 import cv2
 import numpy as np
 
 from harness.apriltag_image import family_geometry, tag_image
-from harness.camera import Camera
+from harness.camera import PINHOLE, Camera
 from harness.geometry import clip_polygon_near, rot_z
+from harness.realism import (
+    Realism,
+    Sensor,
+    floor_texture,
+    gaussian_table,
+    shadow_band_mask,
+    wall_texture,
+    with_distractors,
+)
+from harness.robot import integrate_unicycle
 from harness.world import AprilTagMarker, Box, Sphere, TextureMarker, World, WorldObject
 
 Pose = tuple[float, float, float]
@@ -117,13 +126,19 @@ def _shadow_outlines(obj: WorldObject, light: np.ndarray) -> np.ndarray:
     return np.vstack([marker.corners, _box_corners(*marker.post)])
 
 
-def ground_texture(world: World, with_shadows: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """(BGR floor image without gain, 3x3 texture-pixel -> world map); built once per world."""
+def ground_texture(
+    world: World, with_shadows: bool = True, realism: Realism | None = None, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """(BGR floor image without gain, 3x3 texture-pixel -> world map); built once per world.
+    With `realism`: its generated floor under the lines, and its shadow bands over everything."""
     g = world.ground
     m = g.metres_per_pixel
     cols, rows = round(g.size[0] / m), round(g.size[1] / m)
-    tex = np.empty((rows, cols, 3), np.uint8)
-    tex[:] = g.colour
+    if realism is not None and realism.floor != "plain":
+        tex = floor_texture(realism.floor, (rows, cols), m, seed)
+    else:
+        tex = np.empty((rows, cols, 3), np.uint8)
+        tex[:] = g.colour
     tex_to_world = texture_to_world(tex.shape, m, g.origin)
     world_to_px = np.linalg.inv(tex_to_world)
     if g.texture is not None:
@@ -159,15 +174,11 @@ def ground_texture(world: World, with_shadows: bool = True) -> tuple[np.ndarray,
             sl = np.s_[ys.min() : ys.max() + 1, xs.min() : xs.max() + 1]
             factor = 1.0 - (1.0 - shade) * mask[sl].astype(np.float32) / 255.0
             tex[sl] = np.rint(tex[sl] * factor[..., None])
+    if realism is not None and realism.shadow_bands:
+        bands = shadow_band_mask((rows, cols), m, realism.shadow_bands, seed)
+        factor = 1.0 - (1.0 - realism.shadow_depth) * bands
+        tex[:] = np.rint(tex * factor[..., None])
     return tex, tex_to_world
-
-
-@functools.cache
-def _gaussian_table() -> np.ndarray:
-    """Standard-normal quantiles at the 65536 midpoints of [0, 1]: indexing it with random
-    uint16 codes draws Gaussian noise ~5x faster than Generator.standard_normal."""
-    dist = NormalDist()
-    return np.array([dist.inv_cdf((i + 0.5) / 65536) for i in range(65536)], np.float32)
 
 
 class _View:
@@ -372,50 +383,120 @@ class _MarkerItem:
             self.post.draw(image, view)
 
     def _draw_front(self, image: np.ndarray, view: _View) -> None:
-        cam, g = view.camera, self.geom
-        p = view.to_camera(g.corners)
-        clipped = clip_polygon_near(p, NEAR_M) if p[:, 2].min() < NEAR_M else p
-        if len(clipped) < 3:
-            return
-        uv = cam.project_camera(clipped)
-        u0, v0 = np.floor(uv.min(axis=0)).astype(int) - 1
-        u1, v1 = np.ceil(uv.max(axis=0)).astype(int) + 1
-        u0, v0 = max(u0, 0), max(v0, 0)
-        u1, v1 = min(u1, cam.width - 1), min(v1, cam.height - 1)
-        if u0 > u1 or v0 > v1:
-            return
-        size = (u1 - u0 + 1, v1 - v0 + 1)
-        # Supersample small boards so edges get true area coverage (what the detector's
-        # sub-pixel edge refinement expects); big ones are sharp enough as they are.
-        ss = 4 if size[0] * size[1] <= 40_000 else 2 if size[0] * size[1] <= 160_000 else 1
-        edge_px = np.max(np.hypot(*(uv - np.roll(uv, 1, axis=0)).T)) if len(clipped) == 4 else 1e9
-        # Finest level whose texels cover at least one (super)sample: bilinear magnification
-        # then puts every black/white edge's 50 % point exactly where the geometry says.
-        tex = next((lv for lv in self.levels if lv.shape[1] <= edge_px * ss), self.levels[-1])
-        rows, cols = tex.shape[:2]
-        sx = (g.corners[1] - g.corners[0]) / cols  # metres per texel along the board's right
-        sy = (g.corners[3] - g.corners[0]) / rows  # ... and down
-        origin = g.corners[0] + 0.5 * sx + 0.5 * sy  # centre of texel (0, 0)
-        plane = np.column_stack([view.r @ sx, view.r @ sy, view.r @ origin + view.t])
-        off = 0.5 / ss - 0.5  # sample (i, j) of the fine grid sits at u0 + (i + 0.5) / ss - 0.5
-        fine = np.array([[1.0 / ss, 0.0, u0 + off], [0.0, 1.0 / ss, v0 + off], [0.0, 0.0, 1.0]])
-        warped = cv2.warpPerspective(
-            tex,
-            np.linalg.inv(cam.K @ plane) @ fine,
-            (size[0] * ss, size[1] * ss),
-            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-            borderMode=cv2.BORDER_REPLICATE,
+        _draw_board(image, view, self.geom.corners, self.levels)
+
+
+def _draw_board(
+    image: np.ndarray, view: _View, corners: np.ndarray, levels: list, exact: bool = True
+) -> None:
+    """A textured flat quad (world corners: top-left, top-right, bottom-right, bottom-left as
+    seen from the front) from the finest mip level in `levels` that suits its size. `exact`:
+    supersampled, anti-aliased edges (markers); else one sample per pixel and hard edges
+    (walls: big, and nothing measures their edges)."""
+    cam = view.camera
+    p = view.to_camera(corners)
+    clipped = clip_polygon_near(p, NEAR_M) if p[:, 2].min() < NEAR_M else p
+    if len(clipped) < 3:
+        return
+    uv = cam.project_camera(clipped)
+    u0, v0 = np.floor(uv.min(axis=0)).astype(int) - 1
+    u1, v1 = np.ceil(uv.max(axis=0)).astype(int) + 1
+    u0, v0 = max(u0, 0), max(v0, 0)
+    u1, v1 = min(u1, cam.width - 1), min(v1, cam.height - 1)
+    if u0 > u1 or v0 > v1:
+        return
+    size = (u1 - u0 + 1, v1 - v0 + 1)
+    # Supersample small boards so edges get true area coverage (what the detector's
+    # sub-pixel edge refinement expects); big ones are sharp enough as they are.
+    ss = 4 if size[0] * size[1] <= 40_000 else 2 if size[0] * size[1] <= 160_000 else 1
+    ss = ss if exact else 1
+    edge_px = np.max(np.hypot(*(uv - np.roll(uv, 1, axis=0)).T)) if len(clipped) == 4 else 1e9
+    # Finest level whose texels cover at least one (super)sample: bilinear magnification
+    # then puts every black/white edge's 50 % point exactly where the geometry says.
+    tex = next((lv for lv in levels if lv.shape[1] <= edge_px * ss), levels[-1])
+    rows, cols = tex.shape[:2]
+    sx = (corners[1] - corners[0]) / cols  # metres per texel along the board's right
+    sy = (corners[3] - corners[0]) / rows  # ... and down
+    origin = corners[0] + 0.5 * sx + 0.5 * sy  # centre of texel (0, 0)
+    plane = np.column_stack([view.r @ sx, view.r @ sy, view.r @ origin + view.t])
+    off = 0.5 / ss - 0.5  # sample (i, j) of the fine grid sits at u0 + (i + 0.5) / ss - 0.5
+    fine = np.array([[1.0 / ss, 0.0, u0 + off], [0.0, 1.0 / ss, v0 + off], [0.0, 0.0, 1.0]])
+    warped = cv2.warpPerspective(
+        tex,
+        np.linalg.inv(cam.K @ plane) @ fine,
+        (size[0] * ss, size[1] * ss),
+        flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+        borderMode=cv2.BORDER_REPLICATE,
+    )
+    if ss > 1:
+        warped = cv2.resize(warped, size, interpolation=cv2.INTER_AREA)
+    if warped.ndim == 2:  # tag boards are grey: warping one channel is a third of the work
+        warped = cv2.cvtColor(warped, cv2.COLOR_GRAY2BGR)
+    mask = np.zeros((size[1], size[0]), np.uint8)
+    pts = np.rint((uv - [u0, v0]) * 16).astype(np.int32)
+    roi = image[v0 : v1 + 1, u0 : u1 + 1]
+    if not exact:
+        cv2.fillConvexPoly(mask, pts, 255, cv2.LINE_8, 4)
+        cv2.copyTo(warped, mask, roi)
+        return
+    cv2.fillConvexPoly(mask, pts, 255, cv2.LINE_AA, 4)
+    a = mask.astype(np.float32)[..., None] / 255.0
+    roi[...] = np.rint(roi * (1.0 - a) + warped * a)
+
+
+class _WallItem:
+    """A wall along one edge of the floor, seen from inside the room (a realism option)."""
+
+    def __init__(self, a, b, height: float, texture: np.ndarray, gain: float, light, ambient):
+        a3, b3 = np.array([*a, 0.0]), np.array([*b, 0.0])
+        up = np.array([0.0, 0.0, height])
+        # Walking a -> b the room is on the left; facing the wall from inside, b is on the left.
+        self.corners = np.array([b3 + up, a3 + up, a3, b3])
+        d = b3 - a3
+        self.normal = np.array([-d[1], d[0], 0.0]) / np.linalg.norm(d)  # into the room
+        shade = gain * float(lambert(self.normal, light, ambient))
+        self.levels = [cv2.convertScaleAbs(texture, alpha=shade)]
+        self.centre = self.corners.mean(axis=0)
+
+    def draw(self, image: np.ndarray, view: _View) -> None:
+        if self.normal @ (view.position - self.centre) > 0.0:
+            _draw_board(image, view, self.corners, self.levels, exact=False)
+
+
+class _Lens:
+    """The plumb_bob lens of a camera: a pinhole view, rendered with a margin wide enough for the
+    lens's field of view, is remapped into the distorted image. Each distorted pixel takes the
+    pinhole pixel its ray passes through (cv2.undistortPoints of the pixel grid: the inverse of
+    what cv2.initUndistortRectifyMap gives, which maps rectified pixels to distorted ones)."""
+
+    def __init__(self, camera: Camera):
+        w, h = camera.width, camera.height
+        grid = np.stack(np.meshgrid(np.arange(w), np.arange(h)), axis=-1).astype(np.float64)
+        criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12)
+        pinhole_px = cv2.undistortPointsIter(
+            grid.reshape(-1, 1, 2), camera.K, np.array(camera.distortion), None, camera.K, criteria
+        ).reshape(h, w, 2)
+        low, high = pinhole_px.min(axis=(0, 1)), pinhole_px.max(axis=(0, 1))
+        over = max(0.0, -low[0], -low[1], high[0] - (w - 1), high[1] - (h - 1))
+        pad = math.ceil(over) + 2  # bilinear needs the neighbour too
+        # Same fx, fy and mounting, principal point moved by the margin.
+        self.pinhole = replace(
+            camera,
+            width=w + 2 * pad,
+            height=h + 2 * pad,
+            hfov=2.0 * math.atan((w / 2.0 + pad) / camera.fx),
+            distortion=PINHOLE,
         )
-        if ss > 1:
-            warped = cv2.resize(warped, size, interpolation=cv2.INTER_AREA)
-        if warped.ndim == 2:  # tag boards are grey: warping one channel is a third of the work
-            warped = cv2.cvtColor(warped, cv2.COLOR_GRAY2BGR)
-        mask = np.zeros((size[1], size[0]), np.uint8)
-        pts = np.rint((uv - [u0, v0]) * 16).astype(np.int32)
-        cv2.fillConvexPoly(mask, pts, 255, cv2.LINE_AA, 4)
-        roi = image[v0 : v1 + 1, u0 : u1 + 1]
-        a = mask.astype(np.float32)[..., None] / 255.0
-        roi[...] = np.rint(roi * (1.0 - a) + warped * a)
+        pinhole_px += pad
+        self.maps = cv2.convertMaps(
+            pinhole_px[..., 0].astype(np.float32), pinhole_px[..., 1].astype(np.float32),
+            cv2.CV_16SC2,
+        )  # fmt: skip
+
+    def apply(self, pinhole_image: np.ndarray) -> np.ndarray:
+        return cv2.remap(
+            pinhole_image, *self.maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+        )
 
 
 class Renderer:
@@ -429,23 +510,54 @@ class Renderer:
         gain: float | None = None,
         noise_sigma: float | None = None,
         seed: int | None = None,
+        realism: Realism | None = None,
+        rate_hz: float = 30.0,
+        starts: tuple[tuple[float, float], ...] = (),
     ):
-        self.world = world
+        """`realism` (default: the world's) adds its scene and sensor effects; distractors keep
+        clear of the world's robot start, `starts` and every object; `rate_hz` times the drift."""
         self.camera = camera or world.camera
+        self._lens = _Lens(self.camera) if self.camera.distorted else None
+        self._view_camera = self._lens.pinhole if self._lens else self.camera
         lighting = world.lighting
         self.gain = lighting.gain if gain is None else gain
         self.noise_sigma = world.noise.sigma if noise_sigma is None else noise_sigma
         self.seed = world.noise.seed if seed is None else seed
+        self.realism = world.realism if realism is None else realism
+        if self.realism != Realism():
+            starts = (tuple(world.robot.start[:2]), *starts)
+            world = with_distractors(world, self.realism, self.seed, list(starts))
+        self.world = world
         self.frame = 0  # frame counter keying the noise, so each frame gets fresh noise
-        tex, tex_to_world = ground_texture(world)
+        tex, tex_to_world = ground_texture(world, realism=self.realism, seed=self.seed)
         self._ground = cv2.convertScaleAbs(tex, alpha=self.gain)
         self._tex_to_world = tex_to_world
         self._floor = tuple(min(255.0, c * self.gain) for c in world.ground.colour)
         sky = tuple(min(255.0, c * self.gain) for c in world.background)
-        self._sky = np.empty((self.camera.height, self.camera.width, 3), np.uint8)
+        self._sky = np.empty((self._view_camera.height, self._view_camera.width, 3), np.uint8)
         self._sky[:] = np.rint(sky).astype(np.uint8)
         self._light = np.array(lighting.direction)
         self._items = [self._item(obj, lighting.ambient) for obj in world.objects]
+        self._walls = self._wall_items(world) if self.realism.walls else []
+        self._sensor = (
+            Sensor(self.realism, self.camera.width, self.camera.height, self.seed, rate_hz)
+            if self.realism.sensor_active
+            else None
+        )
+
+    def _wall_items(self, world: World) -> list[_WallItem]:
+        g, r = world.ground, self.realism
+        x0, y0 = g.origin
+        x1, y1 = x0 + g.size[0], y0 + g.size[1]
+        ring = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+        light, ambient = self._light, world.lighting.ambient
+        palette = ((200, 205, 210), (180, 200, 215), (215, 210, 200), (190, 190, 195))
+        items = []
+        for i, (a, b) in enumerate(zip(ring, ring[1:] + ring[:1], strict=True)):
+            length = math.dist(a, b)
+            texture = wall_texture(length, r.walls, palette[i], self.seed * 4 + i)
+            items.append(_WallItem(a, b, r.walls, texture, self.gain, light, ambient))
+        return items
 
     def _item(self, obj: WorldObject, ambient: float):
         if isinstance(obj, Sphere):
@@ -455,15 +567,20 @@ class Renderer:
         return _MarkerItem(obj, self.gain, self._light, ambient)
 
     def render(
-        self, pose: Pose, frame: int | None = None, hidden: frozenset[str] | set[str] = frozenset()
+        self,
+        pose: Pose,
+        frame: int | None = None,
+        hidden: frozenset[str] | set[str] = frozenset(),
+        motion: tuple[float, float] = (0.0, 0.0),
     ) -> np.ndarray:
         """Return a (height, width, 3) uint8 BGR image seen from robot pose (x, y, yaw).
 
         Noise (if sigma > 0) is drawn from an RNG keyed by (seed, frame); `frame` defaults
         to an internal counter that advances on every call. Objects named in `hidden` are left
-        out (their baked floor shadows stay).
+        out (their baked floor shadows stay). `motion` (v, w) is the base's velocity during the
+        exposure, for the realism's motion blur.
         """
-        cam = self.camera
+        cam = self._view_camera
         if frame is None:
             frame, self.frame = self.frame, self.frame + 1
         image = np.empty((cam.height, cam.width, 3), np.uint8)
@@ -481,19 +598,48 @@ class Renderer:
                 borderMode=cv2.BORDER_CONSTANT,
                 borderValue=self._floor,
             )
-        if self._items:
+        if self._items or self._walls:
             view = _View(cam, pose, self._light)
+            for wall in self._walls:  # inside the room: behind every object
+                wall.draw(image, view)
             dist = [float(np.linalg.norm(it.anchor - view.position)) for it in self._items]
             for i in np.argsort(dist)[::-1]:
                 if self.world.objects[i].name not in hidden:
                     self._items[i].draw(image, view)
+        if self._lens is not None:
+            image = self._lens.apply(image)
         if self.noise_sigma > 0.0:
             rng = np.random.default_rng((self.seed, frame))
             codes = np.frombuffer(rng.bytes(image.size * 2), np.uint16).reshape(image.shape)
-            noise = _gaussian_table()[codes]
+            noise = gaussian_table()[codes]
             noise *= self.noise_sigma
             image = cv2.add(image, noise, dtype=cv2.CV_8U)  # rounds and saturates
+        if self._sensor is not None:
+            image = self._sensor.apply(image, frame, self.motion_flow(pose, motion))
         return image
+
+    def _lens_pixels(self, pinhole_px: np.ndarray) -> np.ndarray:
+        """Pinhole pixels where the camera's lens puts them."""
+        pixels = np.asarray(pinhole_px, dtype=float).reshape(-1, 2)
+        return self.camera.distort_pixels(pixels) if self._lens else pixels
+
+    def motion_flow(self, pose: Pose, motion: tuple[float, float]) -> tuple[float, float]:
+        """Image motion (du, dv) px over the exposure of the floor point seen at the centre of
+        the row at 3/4 height (the followers' band), for velocity `motion` = (v, w)."""
+        exposure = self.realism.exposure_time
+        if not exposure or motion == (0.0, 0.0):
+            return 0.0, 0.0
+        cam = self.camera
+        pixel = np.array([[cam.cx, 0.75 * cam.height]])
+        point = cam.pixel_to_ground(pixel, pose)
+        if not np.isfinite(point).all():
+            return 0.0, 0.0
+        opened = integrate_unicycle(pose, -motion[0], -motion[1], exposure)
+        uv, depth = cam.project(np.array([[*point[0], 0.0]]), opened)
+        if depth[0] <= 0.0:
+            return 0.0, 0.0
+        du, dv = (pixel - uv)[0]
+        return float(du), float(dv)
 
     def object_projections(self, pose: Pose) -> list[dict]:
         """Ground truth per object: projected centre, depth, and shape-specific extras.
@@ -508,7 +654,7 @@ class Renderer:
         out = []
         for obj, item in zip(self.world.objects, self._items, strict=False):
             c = view.to_camera(item.anchor)
-            uv = cam.project_camera(c)[0] if c[2] > 0.0 else np.array([np.nan, np.nan])
+            uv = self._lens_pixels(cam.project_camera(c))[0] if c[2] > 0.0 else np.full(2, np.nan)
             in_view = bool(c[2] > 0.0 and 0 <= uv[0] < cam.width and 0 <= uv[1] < cam.height)
             entry = {
                 "name": obj.name,
@@ -520,6 +666,7 @@ class Renderer:
             if isinstance(item, _SphereItem):
                 conic = item.silhouette(view)
                 centre = None if conic is None else np.linalg.solve(conic[:2, :2], -conic[:2, 2])
+                centre = None if centre is None else self._lens_pixels(centre)[0]
                 entry["blob_centre_px"] = None if centre is None else centre.tolist()
             elif isinstance(item, _MarkerItem):
                 corners = item.geom.corners
@@ -528,6 +675,7 @@ class Renderer:
                         obj.size / np.linalg.norm(corners[1] - corners[0])
                     )
                 pix, depth = cam.project(corners, pose)
+                pix = self._lens_pixels(pix)
                 entry["corners_px"] = pix.tolist() if np.all(depth > 0.0) else None
             out.append(entry)
         return out

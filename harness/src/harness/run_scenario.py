@@ -1,5 +1,5 @@
 """`rosrun harness run_scenario SCENARIO.yaml [...] [--jobs N | --scheduler tcp://HOST:PORT]
-[--out DIR] [--video]`
+[--out DIR] [--video] [--contact-sheet [N]]`
 
 Plays each scenario in a ROS graph of its own: its own roscore on a free port, its own ROS_HOME
 and log folder, the behaviour's launch file (or the scripted constant-Twist driver), then the
@@ -7,9 +7,10 @@ simulator in lockstep; with --jobs N, N scenarios at a time on this machine; wit
 each run is a task on that Dask cluster (played the same way on a worker, in a temporary
 folder sent back and unpacked under DIR). Afterwards it scores each recorded
 run and writes DIR/<scenario>/result.json (all metrics and each criterion), run.png (floor map
-with the driven path) and, with --video, camera.mp4; DIR/summary.json and DIR/report.md add up
-all runs (success rate with its 95 % Wilson interval). Exits 1 when a criterion fails, 2 when a
-scenario cannot be run.
+with the driven path), with --video camera.mp4, and with --contact-sheet contact_sheet.png (N
+frames of the camera video with the behaviour's debug overlay, in a grid); DIR/summary.json and
+DIR/report.md add up all runs (success rate with its 95 % Wilson interval). Exits 1 when a
+criterion fails, 2 when a scenario cannot be run.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
+from harness.contact_sheet import DEFAULT_FRAMES, write_contact_sheet
 from harness.plot import plot_run
 from harness.report import format_value, headline, write_summary
 from harness.scenario import (
@@ -143,9 +145,12 @@ def show_progress(scenario: Scenario, env: dict, processes: list[subprocess.Pope
     threading.Thread(target=follow, daemon=True).start()
 
 
-def run_one(scenario: Scenario, out: Path, video: bool, progress: bool = False) -> dict:
+def run_one(
+    scenario: Scenario, out: Path, video: bool, progress: bool = False, sheet: int = 0
+) -> dict:
     """Runs one scenario end to end in a ROS graph of its own; returns the result written to
-    result.json. `progress`: show the run's sim time on stderr while it plays."""
+    result.json. `progress`: show the run's sim time on stderr while it plays; `sheet` > 0: also
+    a contact sheet of that many frames (from the camera video, recorded for it)."""
     out.mkdir(parents=True, exist_ok=True)
     world = load_world(scenario.world_path)
     ros_home = out / "ros_home"
@@ -182,7 +187,7 @@ def run_one(scenario: Scenario, out: Path, video: bool, progress: bool = False) 
             sim_command = [
                 "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip
-            if video:
+            if video or sheet:
                 sim_command.append(f"_video:={out / 'camera.mp4'}")
             sim = start(sim_command)
             if progress:
@@ -215,13 +220,22 @@ def run_one(scenario: Scenario, out: Path, video: bool, progress: bool = False) 
         goal = (x, y, yaw)
     path = np.column_stack([run["x"], run["y"], run["yaw"]])
     plot_run(out / "run.png", world, path, goal=goal, metrics=headline(values), title=scenario.name)
+    if sheet:
+        try:
+            write_contact_sheet(
+                out / "camera.mp4", out / "contact_sheet.png", scenario.rate_hz, sheet
+            )
+        except ValueError as error:
+            raise RuntimeError(str(error)) from None
     return result
 
 
-def play(scenario: Scenario, out: Path, video: bool, progress: bool = False) -> dict:
+def play(
+    scenario: Scenario, out: Path, video: bool, progress: bool = False, sheet: int = 0
+) -> dict:
     """run_one's result, or an error entry when the scenario could not be run."""
     try:
-        return run_one(scenario, out / scenario.name, video, progress)
+        return run_one(scenario, out / scenario.name, video, progress, sheet)
     except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
         return error_entry(scenario, str(error))
 
@@ -251,7 +265,9 @@ def describe(result: dict) -> list[str]:
     return lines
 
 
-def run_all(scenarios: list[Scenario], out: Path, video: bool = False, jobs: int = 1) -> list[dict]:
+def run_all(
+    scenarios: list[Scenario], out: Path, video: bool = False, jobs: int = 1, sheet: int = 0
+) -> list[dict]:
     """Every scenario's result (in the given order), `jobs` at a time, with a progress bar."""
     results: list[dict | None] = [None] * len(scenarios)
     with (
@@ -259,7 +275,9 @@ def run_all(scenarios: list[Scenario], out: Path, video: bool = False, jobs: int
         tqdm(total=len(scenarios), unit="run", file=sys.stderr) as progress,
     ):
         # One run at a time: its sim time too.
-        futures = {pool.submit(play, s, out, video, jobs == 1): i for i, s in enumerate(scenarios)}
+        futures = {
+            pool.submit(play, s, out, video, jobs == 1, sheet): i for i, s in enumerate(scenarios)
+        }
         for future in as_completed(futures):
             result = results[futures[future]] = future.result()
             progress.write("\n".join(describe(result)))
@@ -282,6 +300,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=Path("out/scenarios"), help="output folder")
     parser.add_argument("--video", action="store_true", help="also write camera.mp4")
     parser.add_argument(
+        "--contact-sheet",
+        type=int,
+        nargs="?",
+        const=DEFAULT_FRAMES,
+        default=0,
+        metavar="N",
+        help=f"also write contact_sheet.png: N frames (default {DEFAULT_FRAMES}) of the camera "
+        "video with the behaviour's debug overlay, in a grid (records the video)",
+    )
+    parser.add_argument(
         "--jobs", type=int, default=1, help="scenarios run at once, each in its own ROS graph"
     )
     parser.add_argument(
@@ -293,6 +321,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.jobs < 1:
         parser.error(f"--jobs must be at least 1, got {args.jobs}")
+    if args.contact_sheet < 0:
+        parser.error(f"--contact-sheet must be at least 1 frame, got {args.contact_sheet}")
 
     try:
         scenarios = [s for p in args.scenarios for s in load_scenarios(p)]
@@ -315,7 +345,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"run_scenario: scheduler {args.scheduler}: {error}", file=sys.stderr)
             return 2
     else:
-        results = run_all(scenarios, args.out, args.video, args.jobs)
+        results = run_all(scenarios, args.out, args.video, args.jobs, args.contact_sheet)
     summary = write_summary(args.out, results)
     width = max(len(r["scenario"]) for r in results)
     print("\nsummary")

@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from harness import scoring
+from harness.realism import parse_realism
 from harness.simulation import Perturbations
 from harness.sweep import draw, member_name, parse_sweep
 from harness.validation import (
@@ -36,7 +37,15 @@ from harness.validation import (
     string,
     vector,
 )
-from harness.world import Box, Sphere, World, WorldError, load_world, resolve_world_path
+from harness.world import (
+    Box,
+    Sphere,
+    World,
+    WorldError,
+    load_world,
+    parse_distortion,
+    resolve_world_path,
+)
 
 STOP_CONDITIONS = ("duration", "lap_complete", "still")
 
@@ -178,7 +187,17 @@ def _parse_hidden(value: Any, where: str) -> tuple[tuple[str, float, float], ...
 
 
 def _parse_perturbations(value: Any, where: str) -> Perturbations:
-    f = Fields(value, where, {"gain", "noise_sigma", "delay_steps", "dropout", "line_gap", "hide"})
+    allowed = {
+        "gain",
+        "noise_sigma",
+        "delay_steps",
+        "dropout",
+        "line_gap",
+        "hide",
+        "realism",
+        "lens",
+    }
+    f = Fields(value, where, allowed)
     delay = f.get("delay_steps", number(ge=0.0), None)
     if delay is not None and delay != int(delay):
         raise ScenarioError(f"{f.where('delay_steps')}: must be a whole number, got {delay!r}")
@@ -189,6 +208,8 @@ def _parse_perturbations(value: Any, where: str) -> Perturbations:
         dropouts=f.get("dropout", _parse_dropouts, ()),
         line_gaps=f.get("line_gap", _parse_gaps, ()),
         hidden=f.get("hide", _parse_hidden, ()),
+        realism=tuple(f.get("realism", parse_realism, {}).items()),
+        lens=f.get("lens", parse_distortion, None),
     )
 
 

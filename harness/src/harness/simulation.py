@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
 from harness.geometry import polyline_length
+from harness.realism import realism_from
 from harness.render import Renderer
 from harness.robot import Robot
 from harness.scoring import progress
@@ -31,6 +33,10 @@ class Perturbations:
     line_gaps: tuple[tuple[float, float], ...] = ()
     # Objects left out of the frames: (object name, start, end), [start, end) sim times.
     hidden: tuple[tuple[str, float, float], ...] = ()
+    # Realism options laid over the world's (harness.realism; `profile` already expanded).
+    realism: tuple[tuple[str, Any], ...] = ()
+    # The camera's plumb_bob lens (k1, k2, p1, p2, k3) instead of the world's; None keeps it.
+    lens: tuple[float, float, float, float, float] | None = None
 
 
 def with_line_gaps(world: World, gaps: tuple[tuple[float, float], ...]) -> World:
@@ -126,7 +132,17 @@ class Simulation:
         self.perturbations = perturbations or Perturbations()
         p = self.perturbations
         painted = with_line_gaps(world, p.line_gaps)
-        self.renderer = Renderer(painted, gain=p.gain, noise_sigma=p.noise_sigma, seed=p.noise_seed)
+        camera = world.camera if p.lens is None else replace(world.camera, distortion=p.lens)
+        self.renderer = Renderer(
+            painted,
+            camera,
+            gain=p.gain,
+            noise_sigma=p.noise_sigma,
+            seed=p.noise_seed,
+            realism=realism_from(dict(p.realism), world.realism),
+            rate_hz=rate_hz,
+            starts=(tuple(start[:2]),) if start else (),
+        )
         delay = world.robot.delay_steps if p.delay_steps is None else p.delay_steps
         self.robot = Robot(
             start or world.robot.start,
@@ -161,7 +177,9 @@ class Simulation:
 
     def render(self) -> np.ndarray:
         """The camera frame at the current step (noise keyed by the step, so reruns match)."""
-        return self.renderer.render(self.pose, frame=self.step_index, hidden=self.hidden_now())
+        return self.renderer.render(
+            self.pose, frame=self.step_index, hidden=self.hidden_now(), motion=self.robot.applied
+        )
 
     def step(
         self,

@@ -16,8 +16,9 @@ import numpy as np
 import rospkg
 import yaml
 
-from harness.camera import Camera
+from harness.camera import LENSES, PINHOLE, Camera
 from harness.geometry import Arc, Straight, densify_polyline, trace_segments, wrap_angle
+from harness.realism import Realism, parse_realism, realism_from
 from harness.validation import (
     Colour,
     Fields,
@@ -183,6 +184,7 @@ class World:
     robot: RobotConfig
     camera: Camera
     source: Path | None = None
+    realism: Realism = field(default_factory=Realism)
 
     def centreline(self, index: int = 0) -> np.ndarray:
         """Dense centreline (Nx2, metres) of floor line `index`, as drawn in the texture."""
@@ -380,7 +382,7 @@ def _parse_robot(value: Any, where: str) -> RobotConfig:
 
 
 def _parse_camera(value: Any, where: str) -> Camera:
-    allowed = {"width", "height", "hfov_deg", "height_m", "pitch_deg", "x_offset_m"}
+    allowed = {"width", "height", "hfov_deg", "height_m", "pitch_deg", "x_offset_m", "distortion"}
     f = Fields(value, where, allowed)
     hfov = f.get("hfov_deg", number(gt=0.0, lt=180.0), 60.0)
     pitch = f.get("pitch_deg", number(gt=-89.0, lt=89.0), 0.0)
@@ -391,16 +393,23 @@ def _parse_camera(value: Any, where: str) -> Camera:
         height_m=f.get("height_m", _POSITIVE, 0.30),
         pitch=math.radians(pitch),
         x_offset_m=f.get("x_offset_m", _ANY, 0.0),
+        distortion=f.get("distortion", parse_distortion, PINHOLE),
     )
+
+
+def parse_distortion(value: Any, where: str) -> tuple[float, float, float, float, float]:
+    """A plumb_bob lens: [k1, k2, p1, p2, k3] or a name from camera.LENSES."""
+    if isinstance(value, str):
+        if value not in LENSES:
+            raise WorldError(f"{where}: unknown lens {value!r} (known: {', '.join(LENSES)})")
+        return LENSES[value]
+    return vector(5, number())(value, where)
 
 
 def _parse_world_document(data: Any, base_dir: Path, source: Path | None) -> World:
     base = base_dir
-    top = Fields(
-        data,
-        "",
-        {"name", "background", "ground", "objects", "lighting", "noise", "robot", "camera"},
-    )
+    sections = {"name", "background", "ground", "objects", "lighting", "noise", "robot", "camera"}
+    top = Fields(data, "", sections | {"realism"})
     raw_objects = sequence(top.data.get("objects", []), "objects")
     objects = tuple(
         _parse_object(v, join_path("objects", i), base, i) for i, v in enumerate(raw_objects)
@@ -419,6 +428,7 @@ def _parse_world_document(data: Any, base_dir: Path, source: Path | None) -> Wor
         robot=top.section("robot", _parse_robot),
         camera=top.section("camera", _parse_camera),
         source=source,
+        realism=realism_from(top.section("realism", parse_realism)),
     )
 
 
