@@ -292,7 +292,9 @@ class NodeUnderTest:
         # new process may have been given.
         self.name = f"fuzz{run}_{key}"
         ns = f"/fuzz{run}/{key}"
-        args = [f"{k}:={ns}/{k}" for k in ("image", "camera_info", "cmd_vel", "odom")]
+        topics = {"camera/rgb/image_raw": "image", "camera/rgb/camera_info": "camera_info"}
+        topics |= {"cmd_vel": "cmd_vel", "odom": "odom"}
+        args = [f"{name}:={ns}/{short}" for name, short in topics.items()]
         params = [f"_{k}:={v}" for k, v in spec.params.items()]
         log_dir.mkdir(parents=True, exist_ok=True)
         self.log = open(log_dir / f"{key}.log", "w")  # noqa: SIM115 (closed in finish)
