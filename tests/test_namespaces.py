@@ -150,6 +150,30 @@ def test_remapping_the_shown_names_is_honoured(master_env):
         assert not {"/camera/rgb/image_raw", "/cmd_vel"} & (pubs | subs)
 
 
+@pytest.mark.parametrize(
+    ("package", "executable"),
+    [("follow_bot", "follower"), ("image_converter", "image_converter")],
+)
+def test_a_remap_moves_the_compressed_topic_too(master_env, package, executable):
+    """With _image_transport:=compressed the remapped base name carries the /compressed topic
+    (image_transport alone would append to the unremapped name)."""
+    node = started(
+        ["rosrun", package, executable, "_image_transport:=compressed",
+         "camera/rgb/image_raw:=/usb_cam/image_raw", f"__name:={executable}_compressed"],
+        master_env, ns="robot3",
+    )  # fmt: skip
+    name = f"/robot3/{executable}_compressed"
+    reader = started(["rostopic", "echo", f"{name}/output"], master_env)  # the converter is lazy
+    try:
+        _, subs = topics_of(
+            master_env, name, until=lambda p, s: "/usb_cam/image_raw/compressed" in s
+        )
+    finally:
+        stop(reader)
+        stop(node)
+    assert "/usb_cam/image_raw/compressed" in subs, subs
+
+
 def test_sim_and_follower_drive_in_one_group_ns(tmp_path):
     """`<group ns="robot1">` around course.launch: the simulator's camera and cmd_vel meet the
     follower's under /robot1, and the robot drives (lockstep: every frame answered)."""

@@ -1,6 +1,7 @@
 """`rosrun harness sim`: the simulator as a ROS node (a thin shell around Simulation).
 
-Publishes /clock, the camera image and camera_info (camera/rgb/image_raw, camera/rgb/camera_info),
+Publishes /clock, the camera image and camera_info (camera/rgb/image_raw, or its /compressed JPEG
+as the world's or scenario's camera transport says; camera/rgb/camera_info),
 the true pose (~pose, e.g. /sim/pose) and tf odom -> base_link; subscribes cmd_vel and the
 behaviour's per-frame status (follow_bot_msgs/BehaviourStatus, docs/behaviour_contract.md). Topic
 names other than /clock are relative, so under ROS_NAMESPACE or <group ns> the simulator and the
@@ -39,11 +40,11 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from follow_bot_msgs.msg import BehaviourStatus
 from harness.debug_video import DebugView
-from harness.ros_image import bgr_to_msg
+from harness.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from harness.scenario import ScenarioError, load_scenario
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
@@ -127,6 +128,7 @@ class SimNode:
         if scenario_path:
             scenario = load_scenario(scenario_path)
             world = load_world(scenario.world_path)
+            transport = scenario.camera_transport or world.camera_transport
             self.rate_hz, self.duration = scenario.rate_hz, scenario.duration
             self.lockstep, self.reply_timeout = scenario.lockstep, scenario.reply_timeout
             start, perturbations = scenario.start, scenario.perturbations
@@ -134,6 +136,7 @@ class SimNode:
             self.stop_when_still = scenario.stop_when == "still"
         else:
             world = load_world(resolve_world_path(rospy.get_param("~world", "course")))
+            transport = world.camera_transport
             self.rate_hz = float(rospy.get_param("~rate_hz", 30.0))
             self.duration = float(rospy.get_param("~duration", 0.0))
             self.lockstep = bool(rospy.get_param("~lockstep", True))
@@ -159,7 +162,13 @@ class SimNode:
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", "The publisher should be created", SyntaxWarning)
             self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
-            self.image_pub = rospy.Publisher("camera/rgb/image_raw", Image, queue_size=None)
+            self.jpeg_quality = transport.jpeg_quality if transport.name == "compressed" else None
+            if self.jpeg_quality is None:
+                self.image_pub = rospy.Publisher("camera/rgb/image_raw", Image, queue_size=None)
+            else:  # what image_transport's `compressed` publisher would send
+                self.image_pub = rospy.Publisher(
+                    "camera/rgb/image_raw/compressed", CompressedImage, queue_size=None
+                )
             self.info_pub = rospy.Publisher("camera/rgb/camera_info", CameraInfo, queue_size=None)
         self.pose_pub = rospy.Publisher("~pose", Odometry, queue_size=1)
         self.tf = tf2_ros.TransformBroadcaster()
@@ -180,7 +189,11 @@ class SimNode:
         image = self.sim.render()
         self.camera_info.header.stamp = stamp
         self.info_pub.publish(self.camera_info)
-        self.image_pub.publish(bgr_to_msg(image, stamp, self.camera_info.header.frame_id))
+        frame_id = self.camera_info.header.frame_id
+        if self.jpeg_quality is None:
+            self.image_pub.publish(bgr_to_msg(image, stamp, frame_id))
+        else:
+            self.image_pub.publish(bgr_to_jpeg_msg(image, stamp, frame_id, self.jpeg_quality))
         return image
 
     def _publish_pose(self) -> None:

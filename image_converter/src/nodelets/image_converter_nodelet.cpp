@@ -92,8 +92,10 @@ void ImageConverterNodelet::updateSubscription() {
 void ImageConverterNodelet::subscribe() {
   const image_transport::TransportHints hints(transport_, ros::TransportHints(),
                                               getPrivateNodeHandle());
-  input_ =
-      input_transport_->subscribe(topics::kImage, 1, &ImageConverterNodelet::onImage, this, hints);
+  // Resolved first, so that a remapping of the base name also moves <base>/compressed
+  // (image_transport appends the transport's suffix to the name as given).
+  input_ = input_transport_->subscribe(getNodeHandle().resolveName(topics::kImage), 1,
+                                       &ImageConverterNodelet::onImage, this, hints);
 }
 
 void ImageConverterNodelet::onImage(const sensor_msgs::ImageConstPtr& msg) {

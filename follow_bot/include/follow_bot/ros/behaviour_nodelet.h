@@ -133,8 +133,13 @@ class BehaviourNodelet : public image_converter::CheckedNodelet {
         nh, image_converter::topics::kCameraInfo,
         [this](const sensor_msgs::CameraInfo& info) { onCameraInfo(info); });
     camera_info_topic_ = camera_info_sub_.getTopic();
-    image_sub_ = image_transport::ImageTransport(nh).subscribe(image_converter::topics::kImage, 1,
-                                                               &BehaviourNodelet::onImage, this);
+    // ~image_transport (e.g. compressed) read from this nodelet's private namespace, also when
+    // it runs in a manager. The base name is resolved first so that a remapping of it also moves
+    // the transport's topic (<base>/compressed): image_transport appends to the name as given.
+    const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
+    image_sub_ = image_transport::ImageTransport(nh).subscribe(
+        nh.resolveName(image_converter::topics::kImage), 1, &BehaviourNodelet::onImage, this,
+        hints);
     image_topic_ = image_sub_.getTopic();
   }
 
