@@ -38,6 +38,12 @@ def test_minimal_scenario_gets_documented_defaults():
     assert s.constant_command == (0.2, 0.0)
     assert (s.rate_hz, s.lockstep, s.stop_when, s.standoff) == (30.0, True, "duration", 0.5)
     assert s.perturbations == Perturbations()
+    assert s.camera_transport is None  # the world's
+
+
+def test_camera_transport_overrides_the_worlds():
+    s = parse_scenario(with_(camera_transport={"transport": "compressed", "jpeg_quality": 80}))
+    assert (s.camera_transport.name, s.camera_transport.jpeg_quality) == ("compressed", 80)
 
 
 def test_behaviour_launch_and_args():
@@ -66,6 +72,7 @@ def test_behaviour_launch_and_args():
         (with_(criteria={"cross_track.rms": {}}), "criteria.cross_track.rms: needs min"),
         (with_(criteria={"x": {"maximum": 1}}), "criteria.x.maximum: unknown field"),
         (with_(stop_when="never"), "stop_when: must be one of"),
+        (with_(camera_transport={"transport": "h264"}), "camera_transport.transport: must be"),
         ("just text", "must be a mapping"),
     ],
 )

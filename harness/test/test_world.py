@@ -31,6 +31,15 @@ def test_minimal_world_defaults():
     assert w.robot.max_v == 0.7 and w.robot.max_w == pytest.approx(math.pi)
     assert [o.name for o in w.objects] == ["sphere0", "box1", "sphere2"]
     assert np.linalg.norm(w.lighting.direction) == pytest.approx(1.0)
+    assert (w.camera_transport.name, w.camera_transport.jpeg_quality) == ("raw", 80)
+
+
+def test_camera_transport_fields_sit_beside_the_mounting():
+    data = copy.deepcopy(MINIMAL)
+    data["camera"] = {"pitch_deg": 20, "transport": "compressed", "jpeg_quality": 60}
+    w = parse_world(data)
+    assert (w.camera_transport.name, w.camera_transport.jpeg_quality) == ("compressed", 60)
+    assert w.camera.pitch == pytest.approx(math.radians(20))
 
 
 def test_course_loop(worlds):
@@ -119,6 +128,9 @@ def _broken(path, value):
         (["ground", "size"], "4x4", r"^ground\.size: must be a list, got str"),
         (["ground", "metres_per_pixel"], 1e-5, r"^ground\.metres_per_pixel: .* limit is 8000"),
         (["camera"], {"pitch_deg": 95}, r"^camera\.pitch_deg: must be < 89"),
+        (["camera"], {"transport": "theora"}, r"^camera\.transport: must be one of raw, compr"),
+        (["camera"], {"jpeg_quality": 101}, r"^camera\.jpeg_quality: must be at most 100, got"),
+        (["camera"], {"jpeg_quality": 0}, r"^camera\.jpeg_quality: must be >= 1"),
         (["noise"], {"seed": 1.5}, r"^noise\.seed: must be an integer"),
         (["lighting"], {"direction": [0, 0, -1]}, r"^lighting\.direction\[2\]: light must come"),
         (["objects"], {"a": 1}, r"^objects: must be a list"),

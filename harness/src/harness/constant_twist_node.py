@@ -17,7 +17,7 @@ def main() -> None:
     command = Twist()
     command.linear.x = float(rospy.get_param("~v", 0.2))
     command.angular.z = float(rospy.get_param("~w", 0.0))
-    publisher = rospy.Publisher("/cmd_vel", Twist, queue_size=1)
+    publisher = rospy.Publisher("cmd_vel", Twist, queue_size=1)
     status_publisher = rospy.Publisher("~status", BehaviourStatus, queue_size=10)
 
     def answer(frame: Image) -> None:
@@ -27,7 +27,7 @@ def main() -> None:
         status_publisher.publish(status)
 
     # buff_size above one 640x480 bgr8 frame, so a slow reader drops old frames, not new ones.
-    rospy.Subscriber("/camera/rgb/image_raw", Image, answer, queue_size=1, buff_size=2**24)
+    rospy.Subscriber("camera/rgb/image_raw", Image, answer, queue_size=1, buff_size=2**24)
     rospy.spin()
 
 

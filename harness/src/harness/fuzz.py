@@ -22,6 +22,7 @@ import subprocess
 import sys
 import threading
 import time
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -126,8 +127,57 @@ def odom_msg(yaw=0.0):
     return odom
 
 
+def compressed_msg(msg):
+    """A bgr8 Image as the `compressed` image_transport sends it, PNG-coded (lossless, so the
+    probes' exact answers still hold)."""
+    from sensor_msgs.msg import CompressedImage
+
+    from harness.ros_image import msg_to_bgr
+
+    out = CompressedImage()
+    out.header = msg.header
+    out.format = "bgr8; png compressed bgr8"
+    out.data = cv2.imencode(".png", msg_to_bgr(msg))[1].tobytes()
+    return out
+
+
+def _png_chunk(kind: bytes, body: bytes) -> bytes:
+    return len(body).to_bytes(4, "big") + kind + body + zlib.crc32(kind + body).to_bytes(4, "big")
+
+
+def malformed_compressed() -> list:
+    """CompressedImages no decoder can turn into a usable frame (case `malformed_compressed`)."""
+    from sensor_msgs.msg import CompressedImage
+
+    good = compressed_msg(probe_frame("line")).data
+    jpeg = cv2.imencode(".jpg", floor())[1].tobytes()
+    # A well-formed PNG header announcing a 65535 x 65535 image, then nothing.
+    bomb = b"\x89PNG\r\n\x1a\n" + _png_chunk(
+        b"IHDR", (65535).to_bytes(4, "big") * 2 + bytes([8, 2, 0, 0, 0])
+    )
+    payloads = [
+        ("bgr8; jpeg compressed bgr8", b""),
+        ("bgr8; jpeg compressed bgr8", bytes(range(256)) * 4),
+        ("bgr8; jpeg compressed bgr8", jpeg[: len(jpeg) // 3]),  # truncated
+        ("bgr8; png compressed bgr8", bomb),
+        ("yuv422; png compressed bgr8", good),  # an encoding nobody decodes to
+        ("bgr8; png compressed bgr8", good[:40]),
+    ]
+    messages = []
+    for fmt, data in payloads:
+        msg = CompressedImage(format=fmt, data=data)
+        msg.header.stamp.secs = 1000
+        messages.append(msg)
+    return messages
+
+
+# Cases sent through the `compressed` transport: the nodes run with _image_transport:=compressed.
+COMPRESSED_CASES = {"malformed_compressed"}
+
+
 def crash_cases() -> dict[str, list]:
-    """The four killers found by the first fuzzing run (issue 12), each a short message list."""
+    """The four killers found by the first fuzzing run (issue 12), each a short message list, and
+    malformed payloads of the compressed transport (issue 14)."""
     line = probe_frame("line")
     return {
         # Passes step >= width*2 and data == height*step, but a 16-bit cv::Mat needs an even step.
@@ -141,6 +191,7 @@ def crash_cases() -> dict[str, list]:
             bgr_msg(np.full((h, w, 3), 128, np.uint8), (1000, 0))
             for w, h in [(4, 4), (640, 1), (640, 2), (640, 3), (640, 4), (66, 3), (1, 1), (3, 640)]
         ],
+        "malformed_compressed": malformed_compressed(),
     }
 
 
@@ -281,7 +332,9 @@ def expected_range(probe: str) -> float | None:
 
 
 class NodeUnderTest:
-    def __init__(self, key: str, spec: NodeSpec, env: dict, log_dir: Path, run: int):
+    def __init__(
+        self, key: str, spec: NodeSpec, env: dict, log_dir: Path, run: int, compressed: bool
+    ):
         import rospy
         from geometry_msgs.msg import PoseStamped, Twist
         from nav_msgs.msg import Odometry
@@ -292,8 +345,13 @@ class NodeUnderTest:
         # new process may have been given.
         self.name = f"fuzz{run}_{key}"
         ns = f"/fuzz{run}/{key}"
-        args = [f"{k}:={ns}/{k}" for k in ("image", "camera_info", "cmd_vel", "odom")]
+        topics = {"camera/rgb/image_raw": "image", "camera/rgb/camera_info": "camera_info"}
+        topics |= {"cmd_vel": "cmd_vel", "odom": "odom"}
+        args = [f"{name}:={ns}/{short}" for name, short in topics.items()]
         params = [f"_{k}:={v}" for k, v in spec.params.items()]
+        if compressed:
+            params.append("_image_transport:=compressed")
+        self.compressed = compressed
         log_dir.mkdir(parents=True, exist_ok=True)
         self.log = open(log_dir / f"{key}.log", "w")  # noqa: SIM115 (closed in finish)
         self.process = subprocess.Popen(
@@ -305,7 +363,14 @@ class NodeUnderTest:
         self.non_finite = 0
         self.over_limit = 0
         self.answers: list = []
-        self.image_pub = rospy.Publisher(f"{ns}/image", Image, queue_size=1, tcp_nodelay=True)
+        if compressed:
+            from sensor_msgs.msg import CompressedImage
+
+            self.image_pub = rospy.Publisher(
+                f"{ns}/image/compressed", CompressedImage, queue_size=1, tcp_nodelay=True
+            )
+        else:
+            self.image_pub = rospy.Publisher(f"{ns}/image", Image, queue_size=1, tcp_nodelay=True)
         self.info_pub = rospy.Publisher(f"{ns}/camera_info", CameraInfo, queue_size=1)
         self.odom_pub = rospy.Publisher(f"{ns}/odom", Odometry, queue_size=1)
         self.subs = []
@@ -383,7 +448,7 @@ class NodeUnderTest:
 
         service = f"/{self.name}/capture"
         rospy.wait_for_service(service, timeout=20)
-        frame = probe_frame("idle")
+        frame = self.valid(probe_frame("idle"))
         for _ in range(3):
             self.image_pub.publish(frame)
             time.sleep(0.05)
@@ -401,8 +466,12 @@ class NodeUnderTest:
         """A valid frame for a capturing node: invalid ones do not count against the frame
         timeout (~frame_timeout, 1 s) that would end the capture."""
         if self.spec.capturing:
-            self.image_pub.publish(probe_frame("idle"))
+            self.image_pub.publish(self.valid(probe_frame("idle")))
             time.sleep(0.05)
+
+    def valid(self, frame):
+        """A valid bgr8 frame in this node's transport."""
+        return compressed_msg(frame) if self.compressed else frame
 
     def send(self, msg, kind: str, pause: float):
         pub = {"image": self.image_pub, "camera_info": self.info_pub, "odom": self.odom_pub}[
@@ -423,7 +492,7 @@ class NodeUnderTest:
         for _ in range(5):  # the first answers may still be the watchdog's stop
             with self.lock:
                 self.answers.clear()
-            self.image_pub.publish(probe_frame(probe))
+            self.image_pub.publish(self.valid(probe_frame(probe)))
             deadline = time.monotonic() + 3.0
             while time.monotonic() < deadline:
                 with self.lock:
@@ -523,7 +592,10 @@ def run(keys, messages, seed, cases, log_dir: Path, pause: float) -> list[dict]:
             [(case, msgs) for case, msgs in crash_cases().items()] if cases else [("storm", None)]
         )
         for run_index, (case, case_msgs) in enumerate(batches):
-            nodes = [NodeUnderTest(k, NODES[k], env, log_dir / case, run_index) for k in keys]
+            compressed = case in COMPRESSED_CASES
+            nodes = [
+                NodeUnderTest(k, NODES[k], env, log_dir / case, run_index, compressed) for k in keys
+            ]
             for node in nodes:
                 if not node.wait_connected(30.0):
                     raise RuntimeError(f"{node.key} did not start (see {node.log.name})")

@@ -1,6 +1,6 @@
 """Foundation demo: feeds the ImageConverter a generated stream and saves what it publishes.
 
-Publishes moving colour-gradient frames on /camera/rgb/image_raw, waits for the annotated frames
+Publishes moving colour-gradient frames on camera/rgb/image_raw, waits for the annotated frames
 on /image_converter/output, writes the last one to ~out/image_converter_demo.png, and reports
 whether the lecture's red circle is where it belongs.
 """
@@ -36,8 +36,8 @@ def main() -> None:
     os.makedirs(out_dir, exist_ok=True)
 
     received: list[Image] = []
-    rospy.Subscriber("/image_converter/output", Image, received.append, queue_size=frames)
-    publisher = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1)
+    rospy.Subscriber("image_converter/output", Image, received.append, queue_size=frames)
+    publisher = rospy.Publisher("camera/rgb/image_raw", Image, queue_size=1)
 
     deadline = rospy.Time.now() + rospy.Duration(30.0)
     rate = rospy.Rate(20)

@@ -1,7 +1,8 @@
 """numpy <-> sensor_msgs/Image without cv_bridge (its Python module is built for Debian's numpy)."""
 
+import cv2
 import numpy as np
-from sensor_msgs.msg import Image
+from sensor_msgs.msg import CompressedImage, Image
 
 
 def bgr_to_msg(image: np.ndarray, stamp, frame_id: str) -> Image:
@@ -13,6 +14,19 @@ def bgr_to_msg(image: np.ndarray, stamp, frame_id: str) -> Image:
     msg.encoding = "bgr8"
     msg.step = msg.width * 3
     msg.data = np.ascontiguousarray(image, dtype=np.uint8).tobytes()
+    return msg
+
+
+def bgr_to_jpeg_msg(image: np.ndarray, stamp, frame_id: str, quality: int) -> CompressedImage:
+    """Codes an HxWx3 uint8 BGR array as the `compressed` image_transport publishes it."""
+    ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, quality])
+    if not ok:
+        raise ValueError(f"JPEG coding of a {image.shape} image failed")
+    msg = CompressedImage()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    msg.format = "bgr8; jpeg compressed bgr8"
+    msg.data = data.tobytes()
     return msg
 
 

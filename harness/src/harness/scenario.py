@@ -39,10 +39,12 @@ from harness.validation import (
 )
 from harness.world import (
     Box,
+    CameraTransport,
     Sphere,
     World,
     WorldError,
     load_world,
+    parse_camera_transport,
     parse_distortion,
     resolve_world_path,
 )
@@ -135,6 +137,7 @@ class Scenario:
     standoff: float
     criteria: tuple[Criterion, ...]
     seed: int | None = None  # seeds the pixel noise (None: the world's noise seed)
+    camera_transport: CameraTransport | None = None  # None: the world's
     source: Path | None = None
     spec: dict = field(default_factory=dict, compare=False)  # the run's own fields, as parsed
     parameters: dict = field(default_factory=dict, compare=False)  # a sweep member's draws
@@ -269,7 +272,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
     allowed = {
         "name", "world", "start", "behaviour", "driver", "rate_hz", "duration", "stop_when",
         "lockstep", "reply_timeout", "perturbations", "target", "watch", "goal", "standoff",
-        "criteria", "seed",
+        "criteria", "seed", "camera_transport",
     }  # fmt: skip
     try:
         f = Fields(data, "", allowed)
@@ -317,6 +320,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             standoff=f.get("standoff", number(gt=0.0), 0.5),
             criteria=tuple(criteria.values()),
             seed=seed,
+            camera_transport=f.get("camera_transport", parse_camera_transport, None),
             source=source,
             spec={**data, "name": name, "world": str(world_path)},
         )

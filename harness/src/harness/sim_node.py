@@ -1,23 +1,26 @@
 """`rosrun harness sim`: the simulator as a ROS node (a thin shell around Simulation).
 
-Publishes /clock, the camera image and camera_info, the true pose (/sim/pose) and tf
-odom -> base_link; subscribes /cmd_vel and the behaviour's per-frame status
-(follow_bot_msgs/BehaviourStatus, docs/behaviour_contract.md).
+Publishes /clock, the camera image and camera_info (camera/rgb/image_raw, or its /compressed JPEG
+as the world's or scenario's camera transport says; camera/rgb/camera_info),
+the true pose (~pose, e.g. /sim/pose) and tf odom -> base_link; subscribes cmd_vel and the
+behaviour's per-frame status (follow_bot_msgs/BehaviourStatus, docs/behaviour_contract.md). Topic
+names other than /clock are relative, so under ROS_NAMESPACE or <group ns> the simulator and the
+behaviour it drives share one namespace.
 
 Lockstep (default): publish frame k, wait for the one status the behaviour answers with (up to
 ~reply_timeout wall seconds; a miss is counted), apply the command it says it sent on cmd_vel
 (none sent: the behaviour is quiet, its last command was a zero, the robot stands),
 integrate one step, repeat: runs are repeatable and as fast as the behaviour. Steps without a
-frame (camera dropout) pass at wall pace and apply what arrives on /cmd_vel (the watchdog's
-stop). Real-time (~lockstep false): frames at ~rate_hz of wall clock, the latest /cmd_vel applied.
+frame (camera dropout) pass at wall pace and apply what arrives on cmd_vel (the watchdog's
+stop). Real-time (~lockstep false): frames at ~rate_hz of wall clock, the latest cmd_vel applied.
 
 Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and perturbations) or
 ~world (a world YAML or name), ~rate_hz (30), ~duration (s, 0 = forever), ~lockstep (true),
-~reply_timeout (2.0 wall s), ~status (the behaviour's status topic, e.g. /follower/status;
-"" finds the one BehaviourStatus topic published), ~record (path of an .npz trajectory log
-written at the end),
+~reply_timeout (2.0 wall s), ~status (the behaviour's status topic, e.g. follower/status;
+"" finds the one BehaviourStatus topic published in the simulator's namespace), ~record (path
+of an .npz trajectory log written at the end),
 ~video (path of an MP4 of the camera view, optional), ~video_debug (the behaviour's namespace,
-default /follower: the video shows its ~debug_image and the state and command of its ~line beside
+default follower: the video shows its ~debug_image and the state and command of its ~line beside
 the camera view; "" for the camera view alone), ~wait_for_behaviour (20 wall s).
 """
 
@@ -37,11 +40,11 @@ import tf2_ros
 from geometry_msgs.msg import TransformStamped, Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from follow_bot_msgs.msg import BehaviourStatus
 from harness.debug_video import DebugView
-from harness.ros_image import bgr_to_msg
+from harness.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from harness.scenario import ScenarioError, load_scenario
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
@@ -62,9 +65,9 @@ def camera_info_msg(info: dict) -> CameraInfo:
 
 
 class CommandInbox:
-    """Collects /cmd_vel commands and the behaviour's statuses from the subscriber threads for
+    """Collects cmd_vel commands and the behaviour's statuses from the subscriber threads for
     the stepping loop. A frame's command is taken from its status (which says what it sent), so
-    it cannot race the reply on the other connection; /cmd_vel is counted, and applied on steps
+    it cannot race the reply on the other connection; cmd_vel is counted, and applied on steps
     without a frame (the watchdog's stop)."""
 
     def __init__(self):
@@ -73,7 +76,7 @@ class CommandInbox:
         self._sent = 0  # statuses that say a command went out on cmd_vel
         self._commands = 0
         self.status_command: tuple[float, float] | None = None  # sent by the latest status
-        self.latest = (0.0, 0.0)  # the latest /cmd_vel
+        self.latest = (0.0, 0.0)  # the latest cmd_vel
 
     def put_command(self, msg: Twist) -> None:
         with self._cond:
@@ -91,7 +94,7 @@ class CommandInbox:
 
     def take(self) -> tuple[int, int, int, tuple[float, float] | None]:
         """How many statuses arrived since the last take(), how many of them say a command went
-        out, how many /cmd_vel commands arrived, and the command the last status in that time
+        out, how many cmd_vel commands arrived, and the command the last status in that time
         said it sent (None: no status sent one)."""
         with self._cond:
             taken = (self._statuses, self._sent, self._commands, self.status_command)
@@ -106,10 +109,10 @@ class CommandInbox:
 
 
 def find_status_topic(timeout: float) -> str:
-    """The one topic of type BehaviourStatus in the graph (waits for it up to `timeout` s)."""
+    """The one topic of type BehaviourStatus in this node's namespace (waits up to `timeout` s)."""
     deadline = time.monotonic() + timeout
     while not rospy.is_shutdown():
-        topics = [name for name, kind in rospy.get_published_topics()
+        topics = [name for name, kind in rospy.get_published_topics(rospy.get_namespace())
                   if kind == BehaviourStatus._type]  # fmt: skip
         if len(topics) > 1:
             raise ValueError(f"several behaviour status topics {topics}: set ~status")
@@ -125,6 +128,7 @@ class SimNode:
         if scenario_path:
             scenario = load_scenario(scenario_path)
             world = load_world(scenario.world_path)
+            transport = scenario.camera_transport or world.camera_transport
             self.rate_hz, self.duration = scenario.rate_hz, scenario.duration
             self.lockstep, self.reply_timeout = scenario.lockstep, scenario.reply_timeout
             start, perturbations = scenario.start, scenario.perturbations
@@ -132,6 +136,7 @@ class SimNode:
             self.stop_when_still = scenario.stop_when == "still"
         else:
             world = load_world(resolve_world_path(rospy.get_param("~world", "course")))
+            transport = world.camera_transport
             self.rate_hz = float(rospy.get_param("~rate_hz", 30.0))
             self.duration = float(rospy.get_param("~duration", 0.0))
             self.lockstep = bool(rospy.get_param("~lockstep", True))
@@ -143,7 +148,7 @@ class SimNode:
         self.sim = Simulation(world, rate_hz=self.rate_hz, start=start, perturbations=perturbations)
         self.record_path = rospy.get_param("~record", "")
         self.video_path = rospy.get_param("~video", "")
-        debug_ns = rospy.get_param("~video_debug", "/follower")
+        debug_ns = rospy.get_param("~video_debug", "follower")
         self.debug_view = DebugView(debug_ns) if self.video_path and debug_ns else None
         self.wait_for_behaviour = float(rospy.get_param("~wait_for_behaviour", 20.0))
         self.laps = LapTracker(world.centreline()) if self.stop_at_lap else None
@@ -157,11 +162,17 @@ class SimNode:
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", "The publisher should be created", SyntaxWarning)
             self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
-            self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=None)
-            self.info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=None)
-        self.pose_pub = rospy.Publisher("/sim/pose", Odometry, queue_size=1)
+            self.jpeg_quality = transport.jpeg_quality if transport.name == "compressed" else None
+            if self.jpeg_quality is None:
+                self.image_pub = rospy.Publisher("camera/rgb/image_raw", Image, queue_size=None)
+            else:  # what image_transport's `compressed` publisher would send
+                self.image_pub = rospy.Publisher(
+                    "camera/rgb/image_raw/compressed", CompressedImage, queue_size=None
+                )
+            self.info_pub = rospy.Publisher("camera/rgb/camera_info", CameraInfo, queue_size=None)
+        self.pose_pub = rospy.Publisher("~pose", Odometry, queue_size=1)
         self.tf = tf2_ros.TransformBroadcaster()
-        self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self.inbox.put_command, queue_size=10)
+        self.cmd_sub = rospy.Subscriber("cmd_vel", Twist, self.inbox.put_command, queue_size=10)
         self.status_topic = rospy.get_param("~status", "")
         self.status_sub = None
 
@@ -178,7 +189,11 @@ class SimNode:
         image = self.sim.render()
         self.camera_info.header.stamp = stamp
         self.info_pub.publish(self.camera_info)
-        self.image_pub.publish(bgr_to_msg(image, stamp, self.camera_info.header.frame_id))
+        frame_id = self.camera_info.header.frame_id
+        if self.jpeg_quality is None:
+            self.image_pub.publish(bgr_to_msg(image, stamp, frame_id))
+        else:
+            self.image_pub.publish(bgr_to_jpeg_msg(image, stamp, frame_id, self.jpeg_quality))
         return image
 
     def _publish_pose(self) -> None:

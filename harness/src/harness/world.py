@@ -173,6 +173,31 @@ class RobotConfig:
     delay_steps: int
 
 
+TRANSPORTS = ("raw", "compressed")
+
+
+@dataclass(frozen=True)
+class CameraTransport:
+    """How the simulator publishes its frames: `raw` sensor_msgs/Image on camera/rgb/image_raw,
+    or `compressed` JPEG sensor_msgs/CompressedImage on camera/rgb/image_raw/compressed."""
+
+    name: str = "raw"
+    jpeg_quality: int = 80
+
+
+def parse_camera_transport(value: Any, where: str) -> CameraTransport:
+    """A `{transport, jpeg_quality}` mapping (fields of a world's `camera` or a scenario's
+    `camera_transport`)."""
+    f = Fields(value, where, {"transport", "jpeg_quality"})
+    name = f.get("transport", string, "raw")
+    if name not in TRANSPORTS:
+        raise WorldError(f"{f.where('transport')}: must be one of {', '.join(TRANSPORTS)}")
+    quality = f.get("jpeg_quality", integer(ge=1), 80)
+    if quality > 100:
+        raise WorldError(f"{f.where('jpeg_quality')}: must be at most 100, got {quality}")
+    return CameraTransport(name, quality)
+
+
 @dataclass(frozen=True)
 class World:
     name: str
@@ -183,6 +208,7 @@ class World:
     noise: Noise
     robot: RobotConfig
     camera: Camera
+    camera_transport: CameraTransport = field(default_factory=CameraTransport)
     source: Path | None = None
     realism: Realism = field(default_factory=Realism)
 
@@ -381,9 +407,19 @@ def _parse_robot(value: Any, where: str) -> RobotConfig:
     )
 
 
+_TRANSPORT_FIELDS = {"transport", "jpeg_quality"}
+
+
+def _camera_fields(value: Any, transport: bool) -> Any:
+    """The transport fields of a world's `camera` mapping (or all the others)."""
+    if not isinstance(value, dict):
+        return value  # Fields names the error
+    return {k: v for k, v in value.items() if (k in _TRANSPORT_FIELDS) == transport}
+
+
 def _parse_camera(value: Any, where: str) -> Camera:
     allowed = {"width", "height", "hfov_deg", "height_m", "pitch_deg", "x_offset_m", "distortion"}
-    f = Fields(value, where, allowed)
+    f = Fields(_camera_fields(value, transport=False), where, allowed)
     hfov = f.get("hfov_deg", number(gt=0.0, lt=180.0), 60.0)
     pitch = f.get("pitch_deg", number(gt=-89.0, lt=89.0), 0.0)
     return Camera(
@@ -427,6 +463,9 @@ def _parse_world_document(data: Any, base_dir: Path, source: Path | None) -> Wor
         noise=top.section("noise", _parse_noise),
         robot=top.section("robot", _parse_robot),
         camera=top.section("camera", _parse_camera),
+        camera_transport=top.section(
+            "camera", lambda v, w: parse_camera_transport(_camera_fields(v, transport=True), w)
+        ),
         source=source,
         realism=realism_from(top.section("realism", parse_realism)),
     )

@@ -1,8 +1,8 @@
 // ImageConverter: the lecture's node (ROS Lecture 10) as a lazy nodelet.
 //
-// Subscribes `image` (image_transport, queue 1), draws a red circle at the centre and publishes
-// `~output` (bgr8). Input is subscribed only while `~output` has subscribers or a window is
-// shown, so an idle converter costs nothing.
+// Subscribes `camera/rgb/image_raw` (image_transport, queue 1), draws a red circle at the centre
+// and publishes `~output` (bgr8). Input is subscribed only while `~output` has subscribers or a
+// window is shown, so an idle converter costs nothing.
 #include <algorithm>
 #include <cstdlib>
 #include <mutex>
@@ -20,6 +20,7 @@
 #include "image_converter/overlay.h"
 #include "image_converter/ros/frame_msg.h"
 #include "image_converter/ros/params.h"
+#include "image_converter/ros/topics.h"
 
 namespace image_converter {
 
@@ -91,7 +92,10 @@ void ImageConverterNodelet::updateSubscription() {
 void ImageConverterNodelet::subscribe() {
   const image_transport::TransportHints hints(transport_, ros::TransportHints(),
                                               getPrivateNodeHandle());
-  input_ = input_transport_->subscribe("image", 1, &ImageConverterNodelet::onImage, this, hints);
+  // Resolved first, so that a remapping of the base name also moves <base>/compressed
+  // (image_transport appends the transport's suffix to the name as given).
+  input_ = input_transport_->subscribe(getNodeHandle().resolveName(topics::kImage), 1,
+                                       &ImageConverterNodelet::onImage, this, hints);
 }
 
 void ImageConverterNodelet::onImage(const sensor_msgs::ImageConstPtr& msg) {

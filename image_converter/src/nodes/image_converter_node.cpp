@@ -4,6 +4,5 @@
 
 int main(int argc, char** argv) {
   return image_converter::runNodelet(argc, argv, "image_converter",
-                                     std::make_unique<image_converter::ImageConverterNodelet>(),
-                                     {{"image", "/camera/rgb/image_raw"}});
+                                     std::make_unique<image_converter::ImageConverterNodelet>());
 }

@@ -20,6 +20,7 @@
 #include "follow_bot/ros/command_output.h"
 #include "follow_bot/ros/params.h"
 #include "image_converter/ros/checked_nodelet.h"
+#include "image_converter/ros/topics.h"
 
 namespace follow_bot {
 
@@ -51,10 +52,12 @@ struct BehaviourOptions {
 //    configure(); with live_reconfigure, a dynamic_reconfigure server whose updates go through
 //    the same configure(): a rejected update changes nothing and the server reports back the
 //    settings in force. Any start-up error names the ~param and fails the load (CheckedNodelet).
-//  * `camera_info` (queue 1): usable intrinsics go into camera(), unusable ones are ignored with
+//  * `camera/rgb/camera_info` (queue 1; names relative to the namespace, image_converter/ros/
+//    topics.h): usable intrinsics go into camera(), unusable ones are ignored with
 //    a throttled error. A separate subscription, not a CameraSubscriber: a behaviour keeps
 //    running on frames when camera_info is late or missing (then it says what it cannot do).
-//  * `image` (image_transport, queue 1): frame acceptance (encoding, size, step, stamp checks;
+//  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
+//  stamp checks;
 //    a bad frame is dropped with a throttled error), then per accepted frame step(), the one
 //    CommandOutput::send (cmd_vel, ~status, watchdog, ~enable, final stop), report() and a lazy
 //    ~debug_image.
@@ -127,10 +130,16 @@ class BehaviourNodelet : public image_converter::CheckedNodelet {
       debug_pub_ = image_transport::ImageTransport(pnh).advertise("debug_image", 1);
     }
     camera_info_sub_ = subscribe<sensor_msgs::CameraInfo>(
-        nh, "camera_info", [this](const sensor_msgs::CameraInfo& info) { onCameraInfo(info); });
+        nh, image_converter::topics::kCameraInfo,
+        [this](const sensor_msgs::CameraInfo& info) { onCameraInfo(info); });
     camera_info_topic_ = camera_info_sub_.getTopic();
-    image_sub_ =
-        image_transport::ImageTransport(nh).subscribe("image", 1, &BehaviourNodelet::onImage, this);
+    // ~image_transport (e.g. compressed) read from this nodelet's private namespace, also when
+    // it runs in a manager. The base name is resolved first so that a remapping of it also moves
+    // the transport's topic (<base>/compressed): image_transport appends to the name as given.
+    const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
+    image_sub_ = image_transport::ImageTransport(nh).subscribe(
+        nh.resolveName(image_converter::topics::kImage), 1, &BehaviourNodelet::onImage, this,
+        hints);
     image_topic_ = image_sub_.getTopic();
   }
 

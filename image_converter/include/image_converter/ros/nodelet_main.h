@@ -3,7 +3,6 @@
 #pragma once
 
 #include <csignal>
-#include <map>
 #include <memory>
 #include <string>
 
@@ -21,21 +20,17 @@ inline volatile std::sig_atomic_t& shutdownRequested() {
 inline void requestShutdown(int) { shutdownRequested() = 1; }
 }  // namespace detail
 
-// Runs `nodelet` as node `default_name`. `default_remaps` maps a relative topic name to the
-// topic it should use when the user did not remap it on the command line (e.g. "image" ->
-// "/camera/rgb/image_raw"). On SIGINT the nodelet is destroyed while ROS is still up, so a
-// behaviour's destructor can still publish its final stop command. Returns the exit code: 1
-// when the nodelet fails to start (bad parameters), 0 after a normal shutdown.
+// Runs `nodelet` as node `default_name`, with the command line's remappings (the nodelet's
+// topics are relative, so the node and the nodelet resolve them alike). On SIGINT the nodelet is
+// destroyed while ROS is still up, so a behaviour's destructor can still publish its final stop
+// command. Returns the exit code: 1 when the nodelet fails to start (bad parameters), 0 after a
+// normal shutdown.
 inline int runNodelet(int argc, char** argv, const std::string& default_name,
-                      std::unique_ptr<nodelet::Nodelet> nodelet,
-                      const std::map<std::string, std::string>& default_remaps) {
+                      std::unique_ptr<nodelet::Nodelet> nodelet) {
   ros::init(argc, argv, default_name, ros::init_options::NoSigintHandler);
   std::signal(SIGINT, detail::requestShutdown);
   std::signal(SIGTERM, detail::requestShutdown);
-  nodelet::M_string remappings = ros::names::getRemappings();
-  for (const auto& [from, to] : default_remaps) {
-    remappings.emplace(ros::names::resolve(from, false), to);  // keeps a user's remapping
-  }
+  const nodelet::M_string remappings = ros::names::getRemappings();
   nodelet::V_string my_argv(argv + 1, argv + argc);
   try {
     nodelet->init(ros::this_node::getName(), remappings, my_argv);
