@@ -209,6 +209,8 @@ def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown():
         ("line_follower", "_mode:=fast", "mode: unknown value 'fast'"),
         ("follow_green_stop_red", "_close_area:=-1.0", "close_area must be >= 0, got -1"),
         ("colour_filter", "_colour:=purple", "~colour must be red, green or blue, got 'purple'"),
+        ("three_colours", "_sensitivity:=95",
+         "invalid parameter: colours[0] (red): sensitivity must be in [0, 90], got 95"),
     ],
 )  # fmt: skip
 def test_lab_nodes_refuse_bad_params_naming_them(node, param, message):

@@ -41,7 +41,8 @@ def configured(make, params, prefix="", **fixed):
     try:
         return make(**fields, **fixed)
     except (ValueError, TypeError) as error:
-        rospy.logfatal(f"invalid parameter ({', '.join(names.values()) or 'none'}): {error}")
+        which = f" ({', '.join(names.values())})" if names else ""
+        rospy.logfatal(f"invalid parameter{which}: {error}")
         sys.exit(2)
 
 
