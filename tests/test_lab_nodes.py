@@ -1,5 +1,7 @@
 """The display-only lab nodes (follow_bot/scripts: colour_filter.py, three_colours.py,
-colour_flags.py) on a known frame: the exact pixels of their ~image and the flags they raise.
+colour_flags.py) on a known frame: the exact pixels of their ~image and the flags they raise;
+follow_green_stop_red.py keeping the behaviour contract (cmd_vel while driving, one zero on
+stopping, a zero on shutdown).
 
 Each case starts a roscore and the node (rosrun: Debian's python3), then a child process (this
 file with --client NODE OUT, the venv's python) publishes the frame on camera/rgb/image_raw until
@@ -33,6 +35,32 @@ def known_frame() -> np.ndarray:
     for colour, (rows, cols) in RECTS.values():
         frame[rows, cols] = colour
     return frame
+
+
+def patch_frame(colour, size=40) -> np.ndarray:
+    """The grey floor with a `size` px square of `colour` (BGR) at the centre."""
+    frame = np.full((480, 640, 3), GREY, np.uint8)
+    frame[240 - size // 2 : 240 + size // 2, 320 - size // 2 : 320 + size // 2] = colour
+    return frame
+
+
+def contract_client() -> dict:
+    """Lockstep on follow_green_stop_red's ~status: green ahead, then red, then `rosnode kill`."""
+    import rospy
+    from test_idle_contract import Lockstep
+
+    from harness.fuzz import bgr_msg
+
+    rospy.init_node("lab_client", disable_signals=True)
+    steps = Lockstep("follow_green_stop_red")
+    for _ in range(15):
+        steps.frame(bgr_msg(patch_frame(RECTS["green"][0])))
+    for _ in range(30):
+        steps.frame(bgr_msg(patch_frame(RECTS["red"][0], size=60)))
+    time.sleep(0.5)  # frames stopped: the watchdog must not send a second zero
+    subprocess.run(["rosnode", "kill", "/follow_green_stop_red"], capture_output=True, check=True)
+    time.sleep(1.0)
+    return steps.summary()
 
 
 def client(node: str, out: str) -> dict:
@@ -140,6 +168,40 @@ def test_lab_nodes_answer_help_with_both_pythons():
             assert "private parameters:" in out.stdout and "~" in out.stdout, script
 
 
+def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown():
+    with private_master() as env:
+        node = subprocess.Popen(
+            ["rosrun", "follow_bot", "follow_green_stop_red.py"], env=env,
+            stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
+        )  # fmt: skip
+        try:
+            done = subprocess.run(
+                [sys.executable, __file__, "--contract-client"], env=env, capture_output=True,
+                text=True, timeout=120,
+            )  # fmt: skip
+            assert done.returncode == 0, done.stdout + done.stderr
+            assert node.wait(10) == 0  # shut down by rosnode kill, cleanly
+        finally:
+            if node.poll() is None:
+                node.kill()
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    statuses, twists = result["statuses"], [(v, w) for _, v, w in result["twists"]]
+    assert [s[4] for s in statuses] == ["APPROACHING"] * 15 + ["STOPPED_BY_RED"] * 30
+    assert all(s[0] and s[1] for s in statuses[:15])  # active: a command every frame
+    speeds = [s[2] for s in statuses[:15]]
+    # Ramped up by the limiter from the first frame's zero (no interval to accelerate over yet).
+    assert speeds == sorted(speeds) and speeds[0] == 0.0 < speeds[1] < speeds[-1]
+    idle = statuses[15:]
+    assert not any(s[0] for s in idle)
+    sent = [(s[2], s[3]) for s in idle if s[1]]
+    # The limiter's ramp down while idle, ending on exactly one zero, then silence.
+    assert sent[-1] == (0.0, 0.0) and (0.0, 0.0) not in sent[:-1]
+    assert [s[1] for s in idle] == [True] * len(sent) + [False] * (30 - len(sent))
+    # cmd_vel: what the statuses say was sent, then the shutdown's zero (no watchdog zero).
+    sent_all = [(s[2], s[3]) for s in statuses if s[1]]
+    assert twists == [*sent_all, (0.0, 0.0)]
+
+
 @pytest.mark.parametrize(
     "node, param, message",
     [
@@ -147,6 +209,8 @@ def test_lab_nodes_answer_help_with_both_pythons():
         ("line_follower", "_mode:=fast", "mode: unknown value 'fast'"),
         ("follow_green_stop_red", "_close_area:=-1.0", "close_area must be >= 0, got -1"),
         ("colour_filter", "_colour:=purple", "~colour must be red, green or blue, got 'purple'"),
+        ("three_colours", "_sensitivity:=95",
+         "invalid parameter: colours[0] (red): sensitivity must be in [0, 90], got 95"),
     ],
 )  # fmt: skip
 def test_lab_nodes_refuse_bad_params_naming_them(node, param, message):
@@ -160,3 +224,5 @@ def test_lab_nodes_refuse_bad_params_naming_them(node, param, message):
 
 if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
     print(json.dumps(client(sys.argv[2], sys.argv[3])))
+if __name__ == "__main__" and sys.argv[1:2] == ["--contract-client"]:
+    print(json.dumps(contract_client()))

@@ -41,7 +41,8 @@ def configured(make, params, prefix="", **fixed):
     try:
         return make(**fields, **fixed)
     except (ValueError, TypeError) as error:
-        rospy.logfatal(f"invalid parameter ({', '.join(names.values()) or 'none'}): {error}")
+        which = f" ({', '.join(names.values())})" if names else ""
+        rospy.logfatal(f"invalid parameter{which}: {error}")
         sys.exit(2)
 
 
@@ -78,19 +79,21 @@ class CommandOutput:
         rospy.on_shutdown(self._shutdown)
 
     def send(self, header, desired, active, state):
-        """One frame's decision: the limited command goes out while active, and while idle until
-        it is zero; the frame's ~status. Returns what the robot was told (zero when quiet)."""
+        """One frame's decision, by follow_bot::CommandOutput::send's rules: the limiter runs on
+        every frame; the command goes out while active, and while idle until it is zero (that
+        zero included); the frame's ~status. Returns the limited command."""
         stamp = header.stamp.to_sec() if not header.stamp.is_zero() else rospy.get_time()
         self.watchdog.frame_arrived(rospy.get_time())
-        dt = 0.0 if self.last_stamp is None else stamp - self.last_stamp
-        self.last_stamp = stamp
-        dt = min(max(dt, 0.0), self.watchdog.timeout)
-        command = self.limiter.limit(desired if active else core.Twist2D(), dt)
-        sent = active or not self.quiet
+        # A gap longer than the watchdog timeout counts as the timeout; a backward stamp gives
+        # dt <= 0 (the limiter then only slows down).
+        last, self.last_stamp = self.last_stamp, stamp
+        dt = 0.0 if last is None else min(stamp - last, self.watchdog.timeout)
+        command = self.limiter.limit(desired, dt)
+        zero = command.linear == 0.0 and command.angular == 0.0
+        sent = active or not zero or not self.quiet
         if sent:
-            self._publish(command)
-        else:
-            command = self.limiter.stop()
+            self.cmd_vel.publish(twist_msg(command))
+            self.quiet = zero and not active
         self.status.publish(BehaviourStatus(
             header=header, state=state, enabled=True, active=active, command_sent=sent,
             command=twist_msg(command) if sent else Twist(),
@@ -100,11 +103,9 @@ class CommandOutput:
     def stop(self):
         """An immediate zero, unless already stopped."""
         if not self.quiet:
-            self._publish(self.limiter.stop())
-
-    def _publish(self, command):
-        self.cmd_vel.publish(twist_msg(command))
-        self.quiet = command.linear == 0.0 and command.angular == 0.0
+            self.limiter.stop()
+            self.cmd_vel.publish(Twist())
+            self.quiet = True
 
     def _check_watchdog(self, _event):
         if self.watchdog.should_send_stop(rospy.get_time()):
