@@ -110,9 +110,16 @@ def behaviour_command(scenario: Scenario) -> list[str]:
         v, w = scenario.constant_command
         return ["rosrun", "harness", "constant_twist", f"_v:={v}", f"_w:={w}"]
     b = scenario.behaviour
-    return ["roslaunch", "--wait", b.package, b.launch_file] + [
-        f"{k}:={v}" for k, v in b.args.items()
-    ]
+    # The run's robot description comes from its world (description_command), not the launch's.
+    args = {"robot_description": "false", **b.args}
+    launch = ["roslaunch", "--wait", b.package, b.launch_file]
+    return launch + [f"{k}:={v}" for k, v in args.items()]
+
+
+def description_command(scenario: Scenario) -> list[str]:
+    """robot_state_publisher with the URDF of the world's camera mounting: tf as on the robot."""
+    return ["roslaunch", "--wait", "follow_bot", "robot_description.launch",
+            f"world:={scenario.world_path}"]  # fmt: skip
 
 
 def show_progress(scenario: Scenario, env: dict, processes: list[subprocess.Popen]) -> None:
@@ -179,6 +186,7 @@ def run_one(scenario: Scenario, out: Path, video: bool, progress: bool = False) 
                 raise RuntimeError(f"roscore did not start (see {out}/ros.log)")
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
             start(behaviour_command(scenario))
+            start(description_command(scenario))
             sim_command = [
                 "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip
