@@ -93,6 +93,18 @@ def master_is_ours(port: int, roscore: subprocess.Popen) -> bool:
         return False
 
 
+def wait_for_node(port: int, node: str, timeout: float, process: subprocess.Popen) -> bool:
+    """Whether `node` registers with the master on `port` within `timeout` (giving up once
+    `process`, the one starting it, exits)."""
+    master = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}")
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and process.poll() is None:
+        if master.lookupNode("/run_scenario", node)[0] == 1:
+            return True
+        time.sleep(0.1)
+    return False
+
+
 def stop(process: subprocess.Popen | None, timeout: float = 10.0) -> None:
     """SIGINT (what roslaunch and rospy shut down cleanly on), then harder."""
     if process is None or process.poll() is not None:
@@ -185,8 +197,12 @@ def run_one(scenario: Scenario, out: Path, video: bool, progress: bool = False) 
             else:
                 raise RuntimeError(f"roscore did not start (see {out}/ros.log)")
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
+            # The description's start-up (roslaunch, the URDF script) done before the run's:
+            # its load must not slow the first lockstep frames.
+            description = start(description_command(scenario))
+            if not wait_for_node(port, "/robot_state_publisher", 60.0, description):
+                raise RuntimeError(f"robot_state_publisher did not start (see {out}/ros.log)")
             start(behaviour_command(scenario))
-            start(description_command(scenario))
             sim_command = [
                 "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip
