@@ -95,6 +95,18 @@ def master_is_ours(port: int, roscore: subprocess.Popen) -> bool:
         return False
 
 
+def wait_for_node(port: int, node: str, timeout: float, process: subprocess.Popen) -> bool:
+    """Whether `node` registers with the master on `port` within `timeout` (giving up once
+    `process`, the one starting it, exits)."""
+    master = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}")
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and process.poll() is None:
+        if master.lookupNode("/run_scenario", node)[0] == 1:
+            return True
+        time.sleep(0.1)
+    return False
+
+
 def stop(process: subprocess.Popen | None, timeout: float = 10.0) -> None:
     """SIGINT (what roslaunch and rospy shut down cleanly on), then harder."""
     if process is None or process.poll() is not None:
@@ -112,9 +124,16 @@ def behaviour_command(scenario: Scenario) -> list[str]:
         v, w = scenario.constant_command
         return ["rosrun", "harness", "constant_twist", f"_v:={v}", f"_w:={w}"]
     b = scenario.behaviour
-    return ["roslaunch", "--wait", b.package, b.launch_file] + [
-        f"{k}:={v}" for k, v in b.args.items()
-    ]
+    # The run's robot description comes from its world (description_command), not the launch's.
+    args = {"robot_description": "false", **b.args}
+    launch = ["roslaunch", "--wait", b.package, b.launch_file]
+    return launch + [f"{k}:={v}" for k, v in args.items()]
+
+
+def description_command(scenario: Scenario) -> list[str]:
+    """robot_state_publisher with the URDF of the world's camera mounting: tf as on the robot."""
+    return ["roslaunch", "--wait", "follow_bot", "robot_description.launch",
+            f"world:={scenario.world_path}"]  # fmt: skip
 
 
 def show_progress(scenario: Scenario, env: dict, processes: list[subprocess.Popen]) -> None:
@@ -183,6 +202,11 @@ def run_one(
             else:
                 raise RuntimeError(f"roscore did not start (see {out}/ros.log)")
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
+            # The description's start-up (roslaunch, the URDF script) done before the run's:
+            # its load must not slow the first lockstep frames.
+            description = start(description_command(scenario))
+            if not wait_for_node(port, "/robot_state_publisher", 60.0, description):
+                raise RuntimeError(f"robot_state_publisher did not start (see {out}/ros.log)")
             start(behaviour_command(scenario))
             sim_command = [
                 "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",

@@ -2,7 +2,9 @@
 
 Publishes /clock, the camera image and camera_info (camera/rgb/image_raw, or its /compressed JPEG
 as the world's or scenario's camera transport says; camera/rgb/camera_info),
-the true pose (~pose, e.g. /sim/pose) and tf odom -> base_link; subscribes cmd_vel and the
+the robot's pose as a base driver does (odom, nav_msgs/Odometry, and tf odom -> base_footprint,
+the root of the robot description; exact: the simulator's true pose), the same on ~pose (e.g.
+/sim/pose); subscribes cmd_vel and the
 behaviour's per-frame status (follow_bot_msgs/BehaviourStatus, docs/behaviour_contract.md). Topic
 names other than /clock are relative, so under ROS_NAMESPACE or <group ns> the simulator and the
 behaviour it drives share one namespace.
@@ -53,6 +55,8 @@ from harness.world import WorldError, load_world, resolve_world_path
 # `stop_when: still` ends a run after this long without motion: longer than a behaviour's hold
 # while its target is briefly lost (the parker holds 2 s, then searches), so a pause is not an end.
 STILL_STOP_S = 3.0
+# The robot description's root (harness/robot_description.py): a base driver's odom child frame.
+BASE_FRAME = "base_footprint"
 
 
 def camera_info_msg(info: dict) -> CameraInfo:
@@ -171,6 +175,7 @@ class SimNode:
                 )
             self.info_pub = rospy.Publisher("camera/rgb/camera_info", CameraInfo, queue_size=None)
         self.pose_pub = rospy.Publisher("~pose", Odometry, queue_size=1)
+        self.odom_pub = rospy.Publisher("odom", Odometry, queue_size=1)
         self.tf = tf2_ros.TransformBroadcaster()
         self.cmd_sub = rospy.Subscriber("cmd_vel", Twist, self.inbox.put_command, queue_size=10)
         self.status_topic = rospy.get_param("~status", "")
@@ -202,14 +207,15 @@ class SimNode:
         odom = Odometry()
         odom.header.stamp = self._stamp()
         odom.header.frame_id = "odom"
-        odom.child_frame_id = "base_link"
+        odom.child_frame_id = BASE_FRAME
         odom.pose.pose.position.x, odom.pose.pose.position.y = x, y
         odom.pose.pose.orientation.z = math.sin(yaw / 2.0)
         odom.pose.pose.orientation.w = math.cos(yaw / 2.0)
         odom.twist.twist.linear.x, odom.twist.twist.angular.z = v, w
         self.pose_pub.publish(odom)
+        self.odom_pub.publish(odom)
         tf = TransformStamped()
-        tf.header, tf.child_frame_id = odom.header, "base_link"
+        tf.header, tf.child_frame_id = odom.header, BASE_FRAME
         tf.transform.translation.x, tf.transform.translation.y = x, y
         tf.transform.rotation = odom.pose.pose.orientation
         self.tf.sendTransform(tf)
