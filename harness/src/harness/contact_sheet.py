@@ -34,17 +34,26 @@ def write_contact_sheet(
     """Writes `out` from `count` frames spread evenly over `video` (first to last), each labelled
     with its time; returns the sheet's (height, width). Raises ValueError on an unreadable video."""
     capture = cv2.VideoCapture(str(video))
-    frames = []
-    while True:  # sequential reads: seeking in an MP4 is not frame-exact
-        ok, frame = capture.read()
-        if not ok:
-            break
-        frames.append(frame)
+    total = int(capture.get(cv2.CAP_PROP_FRAME_COUNT))
+    wanted = set(np.rint(np.linspace(0, max(total - 1, 0), count)).astype(int).tolist())
+    frames: dict[int, np.ndarray] = {}
+    index = 0
+    while capture.grab():  # sequential: seeking in an MP4 is not frame-exact
+        if index in wanted or total <= 0:
+            ok, frame = capture.retrieve()
+            if ok:
+                frames[index] = frame
+        index += 1
     capture.release()
     if not frames:
         raise ValueError(f"{video}: no frames to put on a contact sheet")
-    picks = np.unique(np.rint(np.linspace(0, len(frames) - 1, count)).astype(int))
-    height, sheet_w = sheet_size(frames[0].shape[:2], count, columns, width)
+    if total <= 0 or index != total:  # the container's count was missing or wrong: pick again
+        kept = sorted(frames)
+        chosen = {kept[i] for i in np.rint(np.linspace(0, len(kept) - 1, count)).astype(int)}
+        frames = {i: frames[i] for i in kept if i in chosen}
+    picks = sorted(frames)
+    first = frames[picks[0]]
+    height, sheet_w = sheet_size(first.shape[:2], count, columns, width)
     tile_w = sheet_w // columns
     tile_h = height // math.ceil(count / columns)
     sheet = np.zeros((height, sheet_w, 3), np.uint8)
