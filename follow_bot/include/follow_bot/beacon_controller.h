@@ -14,8 +14,8 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/colour_blobs.h"
-#include "follow_bot/ground_projection.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 

@@ -12,9 +12,9 @@
 #include <optional>
 #include <string>
 
-#include "follow_bot/ground_projection.h"
 #include "follow_bot/line_detector.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 

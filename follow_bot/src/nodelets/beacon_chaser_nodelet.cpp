@@ -19,8 +19,8 @@
 #include "follow_bot/BeaconDetections.h"
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 
 namespace follow_bot {
 

@@ -15,9 +15,9 @@
 #include "follow_bot/FollowerConfig.h"
 #include "follow_bot/LineStatus.h"
 #include "follow_bot/line_detector.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/steering_law.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 
 namespace follow_bot {
 

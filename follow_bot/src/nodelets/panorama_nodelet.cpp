@@ -1,7 +1,7 @@
 // Panorama: on a ~capture call the robot turns in place through a set of headings, grabs a
 // frame at each, stitches them and publishes the panorama (latched) on ~panorama.
 //
-// Thin wiring around image_converter's PanoramaCapture (the turn schedule) and stitching core;
+// Thin wiring around PanoramaCapture (the turn schedule) and image_converter's stitching core;
 // BehaviourNodelet adds the camera topics, frame checks, limits, the frame watchdog, ~enable,
 // ~status and the final stop. One camera frame in, one status out; a Twist only during a
 // capture (idle otherwise: no cmd_vel at all).
@@ -27,19 +27,16 @@
 #include <std_srvs/Trigger.h>
 
 #include "follow_bot/PanoramaConfig.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
+#include "follow_bot/panorama_capture.h"
 #include "follow_bot/ros/nodelets.h"
-#include "image_converter/panorama_capture.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 #include "image_converter/stitching.h"
 
 namespace follow_bot {
 
 using image_converter::MatchOptions;
-using image_converter::PanoramaCapture;
-using image_converter::PanoramaCaptureConfig;
 using image_converter::StitchResult;
 using image_converter::TurningCamera;
-using image_converter::wrapAngle;
 
 namespace {
 
@@ -57,7 +54,7 @@ void requireLinked(bool ok, const std::string& rule, double a, double b) {
 
 double yawOf(const nav_msgs::Odometry& odom) {
   const geometry_msgs::Quaternion& q = odom.pose.pose.orientation;
-  return image_converter::yawOfQuaternion(q.x, q.y, q.z, q.w);
+  return yawOfQuaternion(q.x, q.y, q.z, q.w);
 }
 
 }  // namespace

@@ -23,10 +23,10 @@
 #include "follow_bot/ParkerConfig.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot/parking_servo.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/tag_detector.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 
 namespace follow_bot {
 

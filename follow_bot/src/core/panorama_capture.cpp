@@ -1,11 +1,11 @@
-#include "image_converter/panorama_capture.h"
+#include "follow_bot/panorama_capture.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-namespace image_converter {
+namespace follow_bot {
 namespace {
 constexpr double kPi = 3.141592653589793;
 }  // namespace
@@ -96,4 +96,4 @@ PanoramaCapture::Step PanoramaCapture::update(double yaw) {
   return step;
 }
 
-}  // namespace image_converter
+}  // namespace follow_bot

@@ -1,4 +1,4 @@
-#include "follow_bot/frame_watchdog.h"
+#include "follow_bot_common/frame_watchdog.h"
 
 #include <cmath>
 #include <stdexcept>

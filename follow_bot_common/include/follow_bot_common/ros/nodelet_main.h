@@ -11,7 +11,7 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 
-namespace image_converter {
+namespace follow_bot {
 
 namespace detail {
 inline volatile std::sig_atomic_t& shutdownRequested() {
@@ -20,6 +20,14 @@ inline volatile std::sig_atomic_t& shutdownRequested() {
 }
 inline void requestShutdown(int) { shutdownRequested() = 1; }
 }  // namespace detail
+
+// The robot's usual topics: a node's default remappings of its relative camera, command and
+// odometry names.
+inline const std::map<std::string, std::string> kRobotTopics = {
+    {"image", "/camera/rgb/image_raw"},
+    {"camera_info", "/camera/rgb/camera_info"},
+    {"cmd_vel", "/cmd_vel"},
+    {"odom", "/odom"}};
 
 // Runs `nodelet` as node `default_name`. `default_remaps` maps a relative topic name to the
 // topic it should use when the user did not remap it on the command line (e.g. "image" ->
@@ -51,4 +59,4 @@ inline int runNodelet(int argc, char** argv, const std::string& default_name,
   return 0;
 }
 
-}  // namespace image_converter
+}  // namespace follow_bot

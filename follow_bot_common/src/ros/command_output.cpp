@@ -1,18 +1,16 @@
-#include "follow_bot/ros/command_output.h"
+#include "follow_bot_common/ros/command_output.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include <geometry_msgs/Twist.h>
 
-#include "follow_bot/ros/params.h"
+#include "follow_bot_common/ros/camera_input.h"
+#include "follow_bot_common/ros/params.h"
+#include "follow_bot_common/ros/publish_last.h"
 #include "follow_bot_msgs/BehaviourStatus.h"
-#include "image_converter/ros/frame_msg.h"
-#include "image_converter/ros/publish_last.h"
 
 namespace follow_bot {
-
-using image_converter::guardedCallback;
 
 namespace {
 geometry_msgs::Twist twistMsg(const Twist2D& command) {
@@ -61,7 +59,7 @@ CommandOutput::~CommandOutput() {
   wall_timer_.stop();
   std::lock_guard<std::mutex> lock(mutex_);
   last_stamp_ = ros::Time();
-  image_converter::publishLast(publisher_, twistMsg(limiter_.stop()));  // the final zero, always
+  publishLast(publisher_, twistMsg(limiter_.stop()));  // the final zero, always
 }
 
 ros::Time CommandOutput::frameTime(const std_msgs::Header& header) {
@@ -80,7 +78,7 @@ void CommandOutput::frameArrived() {
 
 void CommandOutput::frameDropped(const std::string& reason) {
   std::lock_guard<std::mutex> lock(mutex_);
-  std::string kind = image_converter::problemKind(reason);
+  std::string kind = problemKind(reason);
   if (dropped_.size() >= 16 && dropped_.count(kind) == 0) kind = "other";
   ++dropped_[kind];
   ++dropped_since_report_;

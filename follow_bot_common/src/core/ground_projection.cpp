@@ -1,9 +1,9 @@
-#include "follow_bot/ground_projection.h"
+#include "follow_bot_common/ground_projection.h"
 
 #include <cmath>
 #include <sstream>
 
-#include "follow_bot/config_checks.h"
+#include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {
 namespace {

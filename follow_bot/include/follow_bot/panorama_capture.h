@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace image_converter {
+namespace follow_bot {
 
 struct PanoramaCaptureConfig {
   double total_angle = 2.0943951023931953;  // rad (120 deg) swept, centred on the start heading
@@ -65,4 +65,4 @@ class PanoramaCapture {
   bool active_ = false;
 };
 
-}  // namespace image_converter
+}  // namespace follow_bot

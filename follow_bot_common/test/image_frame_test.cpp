@@ -1,10 +1,10 @@
-#include "image_converter/image_frame.h"
+#include "follow_bot_common/image_frame.h"
 
 #include <gtest/gtest.h>
 
 #include <vector>
 
-namespace image_converter {
+namespace follow_bot {
 namespace {
 
 RawFrame frameOf(const std::vector<std::uint8_t>& data, std::uint32_t width, std::uint32_t height,
@@ -165,4 +165,4 @@ TEST(Encoding, SizesMatchTheirOpenCvTypes) {
 }
 
 }  // namespace
-}  // namespace image_converter
+}  // namespace follow_bot

@@ -1,4 +1,4 @@
-#include "follow_bot/ground_projection.h"
+#include "follow_bot_common/ground_projection.h"
 
 #include <gtest/gtest.h>
 

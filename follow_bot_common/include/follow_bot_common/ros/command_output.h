@@ -13,8 +13,8 @@
 #include <std_msgs/Header.h>
 #include <std_srvs/SetBool.h>
 
-#include "follow_bot/frame_watchdog.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/frame_watchdog.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 

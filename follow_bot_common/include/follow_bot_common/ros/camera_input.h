@@ -1,5 +1,6 @@
-// Glue between sensor_msgs/Image and the ROS-free frame checks: the one way every node in the
-// project accepts a camera frame, and the last-resort guard around every callback.
+// Camera input: glue between sensor_msgs/Image and the ROS-free frame checks (the one way every
+// node in the project accepts a camera frame), camera_info to intrinsics, and the last-resort
+// guard around every callback.
 #pragma once
 
 #include <exception>
@@ -7,13 +8,15 @@
 
 #include <cv_bridge/cv_bridge.h>
 #include <ros/console.h>
+#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/image_encodings.h>
 #include <boost/make_shared.hpp>
 
-#include "image_converter/image_frame.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/image_frame.h"
 
-namespace image_converter {
+namespace follow_bot {
 
 inline RawFrame rawFrameOf(const sensor_msgs::Image& msg) {
   RawFrame frame;
@@ -61,4 +64,22 @@ bool guardedCallback(const char* what, Work&& work) {
   return false;
 }
 
-}  // namespace image_converter
+// Copies CameraInfo's K into `camera` when it is usable. Returns "" on success, otherwise why
+// the message was ignored (`camera` then unchanged). `changed` tells whether the intrinsics
+// differ from before.
+inline std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, CameraGeometry& camera,
+                                    bool& changed) {
+  CameraGeometry updated = camera;
+  updated.fx = info.K[0];
+  updated.fy = info.K[4];
+  updated.cx = info.K[2];
+  updated.cy = info.K[5];
+  const std::string error = validate(updated);
+  if (!error.empty()) return error;
+  changed = updated.fx != camera.fx || updated.fy != camera.fy || updated.cx != camera.cx ||
+            updated.cy != camera.cy;
+  camera = updated;
+  return "";
+}
+
+}  // namespace follow_bot

@@ -6,7 +6,7 @@
 
 #include <nodelet/nodelet.h>
 
-namespace image_converter {
+namespace follow_bot {
 
 class CheckedNodelet : public nodelet::Nodelet {
  protected:
@@ -24,4 +24,4 @@ class CheckedNodelet : public nodelet::Nodelet {
   }
 };
 
-}  // namespace image_converter
+}  // namespace follow_bot

@@ -1,10 +1,10 @@
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "follow_bot/config_checks.h"
+#include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {
 namespace {

@@ -1,4 +1,4 @@
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 #include <gtest/gtest.h>
 

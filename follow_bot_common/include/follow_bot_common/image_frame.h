@@ -12,7 +12,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace image_converter {
+namespace follow_bot {
 
 // The encodings every node in this project accepts (sensor_msgs/image_encodings names).
 enum class Encoding { kBgr8, kRgb8, kBgra8, kRgba8, kMono8, kMono16 };
@@ -69,4 +69,4 @@ cv::Mat toBgr8(const cv::Mat& image, Encoding encoding);
 // toBgr8 of a checked frame, in either byte order.
 cv::Mat frameToBgr8(const RawFrame& frame, Encoding encoding);
 
-}  // namespace image_converter
+}  // namespace follow_bot

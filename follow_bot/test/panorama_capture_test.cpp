@@ -1,4 +1,4 @@
-#include "image_converter/panorama_capture.h"
+#include "follow_bot/panorama_capture.h"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace image_converter {
+namespace follow_bot {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
@@ -106,4 +106,4 @@ TEST(YawOfQuaternion, ReadsUnitQuaternionsAndRejectsTheRest) {
 }
 
 }  // namespace
-}  // namespace image_converter
+}  // namespace follow_bot

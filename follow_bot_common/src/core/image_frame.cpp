@@ -1,10 +1,10 @@
-#include "image_converter/image_frame.h"
+#include "follow_bot_common/image_frame.h"
 
 #include <cctype>
 
 #include <opencv2/imgproc.hpp>
 
-namespace image_converter {
+namespace follow_bot {
 
 std::optional<Encoding> parseEncoding(const std::string& name) {
   if (name == "bgr8" || name == "8UC3") return Encoding::kBgr8;
@@ -148,4 +148,4 @@ cv::Mat toBgr8(const cv::Mat& image, Encoding encoding) {
   return bgr;
 }
 
-}  // namespace image_converter
+}  // namespace follow_bot

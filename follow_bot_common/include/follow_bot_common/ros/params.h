@@ -1,6 +1,6 @@
 // Reading private parameters with their types and ranges checked: a value of the wrong type, a
 // non-finite number or one out of range is a start-up error naming the ~param, never a silent
-// default. Shared by both packages' nodelets (follow_bot's ros/params.h adds its own).
+// default. Shared by every nodelet of the project.
 #pragma once
 
 #include <cmath>
@@ -14,7 +14,9 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 #include <boost/any.hpp>
 
-namespace image_converter {
+#include "follow_bot_common/ground_projection.h"
+
+namespace follow_bot {
 
 // "the string 'abc'", "the number 2.5", ...: what the user gave, for error messages.
 inline std::string describeValue(XmlRpc::XmlRpcValue& value) {
@@ -190,4 +192,20 @@ std::string applyOrKeep(ConfigT& config, ConfigT& in_force, Apply apply) {
   }
 }
 
-}  // namespace image_converter
+// The camera's mounting over `defaults`: ~camera_height (m, > 0), ~camera_pitch_deg (deg, down
+// positive, within (-89, 89)), ~camera_x_offset (m, forward of base_link, finite). Intrinsics
+// arrive later with camera_info. Throws std::invalid_argument naming the first bad value.
+inline CameraGeometry readCameraMounting(const ros::NodeHandle& pnh, CameraGeometry defaults = {}) {
+  CameraGeometry camera = defaults;
+  camera.height_m = positiveParam(pnh, "camera_height", defaults.height_m);
+  const double pitch_deg = checkedParam(
+      pnh, "camera_pitch_deg", defaults.pitch_rad * 180.0 / M_PI,
+      [](double v) { return std::isfinite(v) && std::abs(v) < 89.0; }, "within (-89, 89)");
+  camera.pitch_rad = pitch_deg * M_PI / 180.0;
+  camera.x_offset_m = checkedParam(
+      pnh, "camera_x_offset", defaults.x_offset_m, [](double v) { return std::isfinite(v); },
+      "finite");
+  return camera;
+}
+
+}  // namespace follow_bot

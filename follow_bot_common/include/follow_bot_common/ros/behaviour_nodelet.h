@@ -15,11 +15,11 @@
 #include <sensor_msgs/Image.h>
 #include <boost/thread/recursive_mutex.hpp>
 
-#include "follow_bot/ground_projection.h"
-#include "follow_bot/ros/camera_input.h"
-#include "follow_bot/ros/command_output.h"
-#include "follow_bot/ros/params.h"
-#include "image_converter/ros/checked_nodelet.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/ros/camera_input.h"
+#include "follow_bot_common/ros/checked_nodelet.h"
+#include "follow_bot_common/ros/command_output.h"
+#include "follow_bot_common/ros/params.h"
 
 namespace follow_bot {
 
@@ -61,7 +61,7 @@ struct BehaviourOptions {
 //  * every callback runs guarded (an exception drops the message, never the node) and under
 //    mutex(), the one the dynamic_reconfigure server shares.
 template <typename ConfigT>
-class BehaviourNodelet : public image_converter::CheckedNodelet {
+class BehaviourNodelet : public CheckedNodelet {
  public:
   using Config = ConfigT;
 
