@@ -69,7 +69,6 @@ Settings coreSettings(const FollowerConfig& cfg) {
 class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
  private:
   void setup(ros::NodeHandle& nh, ros::NodeHandle& pnh, const FollowerConfig&) override {
-    camera() = readCameraMounting(pnh);
     use_odom_ = param(pnh, "use_odom", false);
     if (use_odom_) {
       odom_sub_ = subscribe<nav_msgs::Odometry>(nh, "odom", [this](const nav_msgs::Odometry& odom) {

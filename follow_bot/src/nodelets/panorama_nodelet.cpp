@@ -64,13 +64,6 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   }
 
  private:
-  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const PanoramaConfig&) override {
-    camera().pitch_rad = param(pnh, "camera_pitch_deg", 0.0) * kPi / 180.0;
-    if (!(std::abs(camera().pitch_rad) < 1.5)) {
-      throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
-    }
-  }
-
   // Ranges are the .cfg's (readConfig checks them); the rules linking two ~params are here.
   void configure(const PanoramaConfig& cfg) override {
     requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,

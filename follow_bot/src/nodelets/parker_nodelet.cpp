@@ -110,9 +110,6 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
 
  private:
   void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const ParkerConfig& config) override {
-    CameraGeometry level;  // ~camera_pitch_deg defaults to 0
-    level.pitch_rad = 0.0;
-    camera() = readCameraMounting(pnh, level);
     NODELET_INFO("parking in front of the %s at %.2f m", config.target.c_str(), config.standoff);
   }
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import fnmatch
 import json
+import math
 import os
 import signal
 import socket
@@ -32,6 +33,7 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
+from harness.camera import Camera
 from harness.plot import plot_run
 from harness.report import format_value, headline, write_summary
 from harness.scenario import (
@@ -105,13 +107,24 @@ def stop(process: subprocess.Popen | None, timeout: float = 10.0) -> None:
         process.wait()
 
 
-def behaviour_command(scenario: Scenario) -> list[str]:
+def mounting_args(camera: Camera) -> dict[str, float]:
+    """The world camera's mounting as the behaviour launch files' arguments: the node under test
+    is told where its camera really is (every node has the same default mounting)."""
+    return {
+        "camera_height": camera.height_m,
+        "camera_pitch_deg": round(math.degrees(camera.pitch), 9),
+        "camera_x_offset": camera.x_offset_m,
+    }
+
+
+def behaviour_command(scenario: Scenario, camera: Camera) -> list[str]:
     if scenario.behaviour is None:
         v, w = scenario.constant_command
         return ["rosrun", "harness", "constant_twist", f"_v:={v}", f"_w:={w}"]
     b = scenario.behaviour
+    args = {**mounting_args(camera), **b.args}  # a scenario's own args win
     return ["roslaunch", "--wait", b.package, b.launch_file] + [
-        f"{k}:={v}" for k, v in b.args.items()
+        f"{k}:={v}" for k, v in args.items()
     ]
 
 
@@ -178,7 +191,7 @@ def run_one(scenario: Scenario, out: Path, video: bool, progress: bool = False) 
             else:
                 raise RuntimeError(f"roscore did not start (see {out}/ros.log)")
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
-            start(behaviour_command(scenario))
+            start(behaviour_command(scenario, world.camera))
             sim_command = [
                 "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip

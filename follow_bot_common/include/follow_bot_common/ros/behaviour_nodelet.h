@@ -47,7 +47,9 @@ struct BehaviourOptions {
 
 // The nodelet of a behaviour driven by camera frames (`Config`: its generated dynamic_reconfigure
 // config). It owns:
-//  * start-up: the ~params read and checked against the .cfg (readConfig), then setup() and
+//  * start-up: the ~params read and checked against the .cfg (readConfig), the camera's mounting
+//    (readCameraMounting: ~camera_height, ~camera_pitch_deg, ~camera_x_offset over
+//    CameraGeometry's defaults, the same for every behaviour), then setup() and
 //    configure(); with live_reconfigure, a dynamic_reconfigure server whose updates go through
 //    the same configure(): a rejected update changes nothing and the server reports back the
 //    settings in force. Any start-up error names the ~param and fails the load (CheckedNodelet).
@@ -68,7 +70,7 @@ class BehaviourNodelet : public CheckedNodelet {
  protected:
   explicit BehaviourNodelet(BehaviourOptions options = {}) : options_(options) {}
 
-  // Start-up only settings (camera mounting, targets, topics) before the first configure().
+  // Start-up only settings (targets, topics) before the first configure().
   // Throws std::invalid_argument naming a bad ~param.
   virtual void setup(ros::NodeHandle& /*nh*/, ros::NodeHandle& /*pnh*/, const Config& /*config*/) {}
   // Builds the cores from `config`, at start-up and for every live update; a new configuration
@@ -89,8 +91,7 @@ class BehaviourNodelet : public CheckedNodelet {
   // subscriber).
   virtual void drawDebug(cv::Mat& /*canvas*/) {}
 
-  CameraGeometry& camera() { return camera_; }  // mounting (setup()) and the latest intrinsics
-  const CameraGeometry& camera() const { return camera_; }
+  const CameraGeometry& camera() const { return camera_; }  // mounting and latest intrinsics
   bool hasIntrinsics() const { return has_intrinsics_; }
   const std::string& cameraInfoTopic() const { return camera_info_topic_; }
   const std::string& imageTopic() const { return image_topic_; }
@@ -115,6 +116,7 @@ class BehaviourNodelet : public CheckedNodelet {
     ros::NodeHandle& pnh = getPrivateNodeHandle();
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     applied_config_ = readConfig<Config>(pnh);  // throws on bad ~params
+    camera_ = readCameraMounting(pnh);
     setup(nh, pnh, applied_config_);
     configure(applied_config_);
     output_ = std::make_unique<CommandOutput>(nh, pnh, options_.allow_reverse);
