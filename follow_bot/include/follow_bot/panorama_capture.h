@@ -6,17 +6,23 @@
 #include <string>
 #include <vector>
 
+#include "follow_bot/PanoramaDefaults.h"
+
 namespace follow_bot {
 
+// Defaults: cfg/Panorama.cfg's (PanoramaDefaults, generated), in radians.
 struct PanoramaCaptureConfig {
-  double total_angle = 2.0943951023931953;  // rad (120 deg) swept, centred on the start heading
-  double step_angle = 0.3490658503988659;   // rad (20 deg) between grabbed frames, at most
-  double max_turn_rate = 0.5;               // rad/s while turning to the next heading
-  double min_turn_rate = 0.05;              // rad/s, so the last bit of a turn does not creep
-  double yaw_gain = 2.0;                    // 1/s: turn rate per radian of heading error
-  double yaw_tolerance = 0.01;              // rad: close enough to a heading to stop there
-  int settle_frames = 5;                    // frames held still at a heading before grabbing
-  bool return_to_start = true;              // turn back to the start heading at the end
+  using Defaults = PanoramaDefaults;
+  static constexpr double kRadPerDeg = 3.141592653589793 / 180.0;
+  double total_angle = Defaults::total_angle_deg * kRadPerDeg;  // rad swept, centred on the start
+  double step_angle = Defaults::step_angle_deg * kRadPerDeg;  // rad between grabbed frames, at most
+  double max_turn_rate = Defaults::max_angular;  // rad/s while turning to the next heading
+  double min_turn_rate = Defaults::min_angular;  // rad/s, so the end of a turn does not creep
+  double yaw_gain = Defaults::yaw_gain;          // 1/s: turn rate per radian of heading error
+  double yaw_tolerance =
+      Defaults::yaw_tolerance_deg * kRadPerDeg;  // rad: close enough to a heading
+  int settle_frames = Defaults::settle_frames;   // frames held still at a heading before grabbing
+  bool return_to_start = Defaults::return_to_start;  // turn back to the start heading at the end
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field.
