@@ -18,6 +18,10 @@ from cfg_defaults import read_cfg  # noqa: E402
 CFGS = sorted(p for p in REPO.glob("*/cfg/*.cfg"))
 # Cores whose defaults come from a generated header, by the .cfg they come from.
 GENERATED = {
+    "follow_bot/cfg/BeaconChaser.cfg": [
+        "follow_bot/include/follow_bot/beacon_controller.h",
+        "follow_bot/include/follow_bot/colour_blobs.h",
+    ],
     "follow_bot/cfg/Follower.cfg": [
         "follow_bot/include/follow_bot/line_detector.h",
         "follow_bot/include/follow_bot/steering_law.h",
