@@ -26,6 +26,7 @@ GENERATED = {
         "follow_bot/include/follow_bot/line_detector.h",
         "follow_bot/include/follow_bot/steering_law.h",
     ],
+    "follow_bot/cfg/Parker.cfg": ["follow_bot/include/follow_bot/parking_servo.h"],
     "follow_bot/cfg/Panorama.cfg": ["follow_bot/include/follow_bot/panorama_capture.h"],
 }
 CONFIG_STRUCT = re.compile(r"^struct \w*Config \{\n(.*?)^\};", re.M | re.S)
