@@ -129,7 +129,14 @@ def drive_then_ctrl_c(env: dict, launch_args: list[str], drove) -> tuple[str, li
 @pytest.mark.full
 @pytest.mark.skipif(shutil.which("colcon") is None, reason="colcon is in tools/debian-packages.txt")
 def test_installed_launch_files(tmp_path):
-    packages = ["worlds", "follow_bot_msgs", "harness", "image_converter", "follow_bot"]
+    packages = [
+        "worlds",
+        "follow_bot_msgs",
+        "follow_bot_common",
+        "harness",
+        "image_converter",
+        "follow_bot",
+    ]
     install = colcon_install(tmp_path, packages)
     port = free_port()
     env = installed_env(install, tmp_path, port)

@@ -30,4 +30,4 @@ def test_catkin_lint_is_clean():
     )
     out = lint.stdout + lint.stderr
     assert lint.returncode == 0, out
-    assert "checked 6 packages and found 0 problems" in out, out
+    assert "checked 7 packages and found 0 problems" in out, out

@@ -14,40 +14,18 @@ plain number). A Markdown file holds a table between
 
 import argparse
 import ast
-import contextlib
 import re
-import runpy
 import sys
 from pathlib import Path
-from unittest import mock
-
-from dynamic_reconfigure import parameter_generator_catkin
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "follow_bot_common" / "cmake"))
+from cfg_defaults import read_cfg  # noqa: E402  (the one .cfg reader, also the build's)
+
 BLOCK = re.compile(r"(<!-- params: (?P<cfg>\S+) -->\n)(?P<table>.*?)(<!-- end params -->)", re.S)
 UNIT = re.compile(r"^(?P<text>.*?)\s*\[(?P<unit>[^\]]+)\]$")
 NONE = "\N{EN DASH}"  # an empty cell
 TYPES = {"int": "int", "double": "double", "str": "string", "bool": "bool"}
-
-
-def read_cfg(path: Path) -> list[dict]:
-    """The parameters `path` declares, in order, as dynamic_reconfigure's generator holds them."""
-    generators = []
-
-    def capture(gen, *_names):
-        generators.append(gen)
-        return 0
-
-    # The generator writes C++ and Python into directories named on argv; only its list is
-    # wanted. The .cfg ends with exit(gen.generate(...)).
-    with (
-        mock.patch.object(parameter_generator_catkin.ParameterGenerator, "generate", capture),
-        mock.patch.object(sys, "argv", [str(path), "", "", "", ""]),
-        contextlib.suppress(SystemExit),
-    ):
-        runpy.run_path(str(path), run_name="__main__")
-    (gen,) = generators
-    return gen.group.get_parameters()
 
 
 def number(value) -> str:

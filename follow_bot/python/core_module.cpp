@@ -16,8 +16,6 @@
 
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
-#include "follow_bot/frame_watchdog.h"
-#include "follow_bot/ground_projection.h"
 #include "follow_bot/line_controller.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot/line_path.h"
@@ -26,7 +24,9 @@
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/steering_law.h"
 #include "follow_bot/tag_detector.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/frame_watchdog.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/velocity_limiter.h"
 #include "image_converter/pybind_support.h"
 
 namespace py = pybind11;

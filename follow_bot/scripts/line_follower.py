@@ -21,6 +21,9 @@ lab.start("line_follower", __doc__, {
     "kd": "rad/s per unit of error per s (0: P control)",
     "band_top_fraction": "crop: first row, as a fraction of the height (0.75)",
     "watchdog_timeout": "s without a frame before one zero Twist (0.15)",
+    "camera_height": "path: optical centre above the floor, m (default: the C++ nodes' one)",
+    "camera_pitch_deg": "path: camera pitch, deg, down positive (default: the C++ nodes' one)",
+    "camera_x_offset": "path: optical centre forward of base_link, m (default: the C++ nodes' one)",
 })  # fmt: skip
 defaults = core.SteeringConfig()
 pd = lab.configured(core.PdConfig, {"kp": defaults.pd.kp, "kd": 0.0})
@@ -36,9 +39,8 @@ camera = []  # the intrinsics, once camera_info arrives (path mode)
 
 
 def on_camera_info(info):
-    fx, _, cx, _, fy, cy = info.K[:6]
     try:
-        camera[:] = [core.CameraGeometry(fx=fx, fy=fy, cx=cx, cy=cy)]
+        camera[:] = [lab.camera_geometry(info)]
     except ValueError as error:  # e.g. all zeros: path keeps steering as pd
         rospy.logwarn_throttle(5.0, f"camera_info unusable: {error}")
 

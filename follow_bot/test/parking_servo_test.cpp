@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 namespace {

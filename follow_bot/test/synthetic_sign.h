@@ -10,7 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "follow_bot/ground_projection.h"
+#include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
 namespace test {

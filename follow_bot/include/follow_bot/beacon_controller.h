@@ -13,9 +13,10 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot/BeaconChaserDefaults.h"
 #include "follow_bot/colour_blobs.h"
-#include "follow_bot/ground_projection.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 
@@ -112,27 +113,31 @@ enum class BeaconState {
 };
 const char* toString(BeaconState state);
 
+// Defaults of the parameters cfg/BeaconChaser.cfg declares: BeaconChaserDefaults (generated).
 struct BeaconControllerConfig {
   BeaconMode mode = BeaconMode::kFollowGreenStopRed;
-  double search_rate = 0.5;  // rad/s, spin while the target is out of view
+  double search_rate =
+      BeaconChaserDefaults::search_rate;  // rad/s, spin while the target is out of view
 
   // Follow mode. Colour names refer to the detector's ColourSpec names.
-  std::string follow_colour = "green";
-  std::string stop_colour = "red";
+  std::string follow_colour = BeaconChaserDefaults::follow_colour;
+  std::string stop_colour = BeaconChaserDefaults::stop_colour;
   // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre, ~85000 px^2 0.47 m from its
   // surface (what the scenarios run with; cfg/BeaconChaser.cfg's default).
-  double close_area = 85000.0;   // px^2: hold once the follow blob is at least this big
-  double stop_min_area = 500.0;  // px^2: a stop blob at least this big stops the robot
+  double close_area =
+      BeaconChaserDefaults::close_area;  // px^2: hold once the follow blob is at least this big
+  double stop_min_area =
+      BeaconChaserDefaults::stop_min_area;  // px^2: a stop blob at least this big stops the robot
   // The robot stays stopped this long after the stop colour was last seen, so one frame that
   // misses it does not let the robot lurch forward.
-  double stop_release_delay = 0.3;  // s
-  double approach_speed = 0.2;      // m/s
+  double stop_release_delay = BeaconChaserDefaults::stop_release_delay;  // s
+  double approach_speed = BeaconChaserDefaults::approach_speed;          // m/s
   // angular = -turn_gain * e with e = (centroid_x - width / 2) / (width / 2) in [-1, 1]; e = 1
   // is the image edge, 30 deg off the axis, for the harness camera.
-  double turn_gain = 1.5;  // rad/s per unit of normalised error
+  double turn_gain = BeaconChaserDefaults::turn_gain;  // rad/s per unit of normalised error
 
   // Approach mode.
-  std::string target_colour = "green";
+  std::string target_colour = BeaconChaserDefaults::target_colour;
   BeaconObject target;
   // The rgb and dumpster worlds' camera: the harness defaults, level (no camera block means
   // pitch_deg 0). Set from CameraInfo and the camera's mounting.
@@ -141,19 +146,21 @@ struct BeaconControllerConfig {
     level.pitch_rad = 0.0;
     return level;
   }();
-  double stop_distance = 1.0;  // m, target range (see RangeEstimate) to stop at
+  double stop_distance =
+      BeaconChaserDefaults::stop_distance;  // m, target range (see RangeEstimate) to stop at
   // linear = k_range * (range - stop_distance), clamped to [0, max_linear] (to
   // [-max_linear, max_linear] with allow_reverse): a first-order approach, no overshoot.
-  double k_range = 0.8;     // 1/s
-  double max_linear = 0.3;  // m/s
+  double k_range = BeaconChaserDefaults::k_range;        // 1/s
+  double max_linear = BeaconChaserDefaults::max_linear;  // m/s
   bool allow_reverse = false;
   // The linear speed is scaled by max(0, 1 - |bearing| / speed_taper_bearing), so a robot
   // facing away turns toward the object before driving and arrives along a straight line: a
   // sideways drift would show later as a bearing error, once a box too close to fit in the
   // frame no longer shows its centre.
   double speed_taper_bearing = 0.2;  // rad
-  double k_bearing = 2.0;            // angular = -k_bearing * bearing, rad/s per rad
-  double max_angular = 1.0;          // rad/s, bound on that angular
+  double k_bearing =
+      BeaconChaserDefaults::k_bearing;  // angular = -k_bearing * bearing, rad/s per rad
+  double max_angular = BeaconChaserDefaults::max_angular;  // rad/s, bound on that angular
   // Arrived when |range - stop_distance| and |bearing| are below these. The robot closes in
   // from one side and stops on the first frame inside, so it ends near the tolerance: half of
   // the 1 cm goal leaves room for the range's pixel quantisation (6 mm per row at 1 m).

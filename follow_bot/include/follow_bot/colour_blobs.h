@@ -9,6 +9,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot/BeaconChaserDefaults.h"
+
 namespace follow_bot {
 
 // A colour as a hue window plus saturation and value floors, in OpenCV's 8-bit HSV (H 0..179,
@@ -41,7 +43,7 @@ struct ColourBlobConfig {
   int open_kernel = 3;
   int close_kernel = 5;
   // A colour is found when its largest external contour encloses at least this many px^2.
-  double min_area = 100.0;
+  double min_area = BeaconChaserDefaults::min_area;
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field,

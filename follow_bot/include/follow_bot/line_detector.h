@@ -12,6 +12,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot/FollowerDefaults.h"
+
 namespace follow_bot {
 
 // A colour in OpenCV's 8-bit HSV: H in 0..179 (degrees / 2), S and V in 0..255.
@@ -86,22 +88,24 @@ class HsvBox {
 
 // A horizontal band of rows: [floor(top_fraction * height), that + rows), clipped to the image.
 struct BandConfig {
-  double top_fraction = 0.75;
-  int rows = 20;
+  double top_fraction = FollowerDefaults::band_top_fraction;
+  int rows = FollowerDefaults::band_rows;
 };
 
+// Defaults: cfg/Follower.cfg's (FollowerDefaults, generated).
 struct LineDetectorConfig {
+  using Defaults = FollowerDefaults;
   // The lecture's yellow. The lecture's upper V is 255, so V >= 100 is the only V condition;
   // it rejects dark, noisy pixels whose hue is meaningless.
-  HsvColor lower{20, 100, 100};
-  HsvColor upper{30, 255, 255};
-  BandConfig band{0.75, 20};  // the lecture's band
+  HsvColor lower{Defaults::h_min, Defaults::s_min, Defaults::v_min};
+  HsvColor upper{Defaults::h_max, Defaults::s_max, Defaults::v_max};
+  BandConfig band;  // the lecture's band
   // A second band higher in the image (further ahead) for anticipating curves.
-  bool look_ahead_enabled = false;
-  BandConfig look_ahead{0.55, 20};
+  bool look_ahead_enabled = Defaults::look_ahead;
+  BandConfig look_ahead{Defaults::look_ahead_top_fraction, Defaults::band_rows};
   // A band is `found` with at least this many line pixels. Measurements with fewer (but > 0)
   // pixels still carry a centroid, which is what the lecture uses.
-  int min_pixels = 30;
+  int min_pixels = Defaults::min_pixels;
   // Confidence falls once the line's mean width per row exceeds this fraction of the image
   // width (a frame full of yellow is not a line); see BandMeasurement::confidence.
   double max_width_fraction = 0.35;

@@ -23,9 +23,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "follow_bot/ground_projection.h"
 #include "follow_bot/line_controller.h"
 #include "follow_bot/steering_law.h"
+#include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
 

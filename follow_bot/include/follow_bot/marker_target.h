@@ -7,7 +7,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "follow_bot/ground_projection.h"
+#include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
 

@@ -23,9 +23,10 @@
 #include <optional>
 #include <string>
 
-#include "follow_bot/ground_projection.h"
+#include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 
@@ -33,18 +34,21 @@ enum class ParkingState { kSearching, kApproaching, kAligning, kParked, kLost };
 const char* toString(ParkingState state);
 
 struct ParkingServoConfig {
-  double standoff_m = 0.5;            // base origin to marker centre along its normal, m
-  double gain = 1.5;                  // vpServo lambda, 1/s
-  double steer_gain = 4.0;            // k in b* = -k * phi
-  double max_bearing_rad = 0.35;      // |b*| bound, keeps the marker inside the 60 deg view
-  double backoff_m = 0.7;             // aligning: reverse to standoff + backoff, m
-  double max_linear = 0.4;            // m/s, both components scaled down together beyond it
-  double max_angular = 1.2;           // rad/s, likewise
-  double search_rate = 1.0;           // rad/s; the first search turns this way (positive: left)
-  double lost_timeout = 2.0;          // s a lost marker is waited for before searching again
-  double position_tolerance = 0.003;  // m, along the normal
-  double lateral_tolerance = 0.004;   // m, across the normal
-  double heading_tolerance_rad = 0.5 * 3.14159265358979323846 / 180.0;
+  using D = ParkerDefaults;  // cfg/Parker.cfg's defaults (generated)
+  static constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+  double standoff_m = D::standoff;    // base origin to marker centre along its normal, m
+  double gain = D::gain;              // vpServo lambda, 1/s
+  double steer_gain = D::steer_gain;  // k in b* = -k * phi
+  double max_bearing_rad =
+      D::max_bearing_deg * kRadPerDeg;    // |b*| bound, keeps the marker inside the 60 deg view
+  double backoff_m = D::backoff;          // aligning: reverse to standoff + backoff, m
+  double max_linear = D::max_linear;      // m/s, both components scaled down together beyond it
+  double max_angular = D::max_angular;    // rad/s, likewise
+  double search_rate = D::search_rate;    // rad/s; the first search turns this way (positive: left)
+  double lost_timeout = D::lost_timeout;  // s a lost marker is waited for before searching again
+  double position_tolerance = D::position_tolerance;  // m, along the normal
+  double lateral_tolerance = D::lateral_tolerance;    // m, across the normal
+  double heading_tolerance_rad = D::heading_tolerance_deg * kRadPerDeg;
   double linear_tolerance = 0.01;   // m/s, commanded speed to count as stopped
   double angular_tolerance = 0.02;  // rad/s
   CameraGeometry camera;            // mounting (height, pitch, x offset) for cVe and the base frame

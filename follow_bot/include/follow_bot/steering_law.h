@@ -12,9 +12,9 @@
 #include <optional>
 #include <string>
 
-#include "follow_bot/ground_projection.h"
 #include "follow_bot/line_detector.h"
-#include "follow_bot/velocity_limiter.h"
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 
@@ -45,24 +45,24 @@ const char* toString(LineState state);
 // pd's steering and speed taper.
 struct PdConfig {
   // angular = -(kp * e + kd * de/dt), clamped to +-max_angular.
-  double kp = 1.5;                 // rad/s per unit of normalised error
-  double kd = 0.1;                 // rad/s per (unit of normalised error / s)
-  double max_derivative_dt = 0.5;  // s; older previous measurements give no derivative term
+  double kp = FollowerDefaults::kp;  // rad/s per unit of normalised error
+  double kd = FollowerDefaults::kd;  // rad/s per (unit of normalised error / s)
+  double max_derivative_dt = 0.5;    // s; older previous measurements give no derivative term
   // When the look-ahead band is found, e = (1 - w) e_near + w e_ahead with this w in [0, 1].
-  double look_ahead_weight = 0.3;
+  double look_ahead_weight = FollowerDefaults::look_ahead_weight;
   // linear = max_linear * (1 - taper |e| - curvature_taper |e_ahead - e_near|), clamped to
   // [min_linear, max_linear]; the curvature term needs a found look-ahead band.
-  double taper = 0.6;            // speed fraction lost per unit |e|
-  double curvature_taper = 0.5;  // speed fraction lost per unit |e_ahead - e_near|
+  double taper = FollowerDefaults::taper;  // speed fraction lost per unit |e|
+  double curvature_taper = 0.5;            // speed fraction lost per unit |e_ahead - e_near|
 };
 
 // The lost-line search (pd's, and so path's once its memory runs out), timed from the last
 // sighting.
 struct LineSearchConfig {
-  double lost_grace = 1.0;       // s of kLost
-  double lost_linear = 0.05;     // m/s while coasting in kLost
-  double lost_angular = 0.4;     // rad/s toward the last side in kLost
-  double search_rate = 0.6;      // rad/s spin toward the last side in kSearching
+  double lost_grace = 1.0;                             // s of kLost
+  double lost_linear = 0.05;                           // m/s while coasting in kLost
+  double lost_angular = 0.4;                           // rad/s toward the last side in kLost
+  double search_rate = FollowerDefaults::search_rate;  // rad/s spin toward the last side
   double search_timeout = 12.0;  // s of kSearching (~1 turn at 0.6 rad/s) before kGaveUp
 };
 
@@ -74,8 +74,8 @@ struct PathConfig {
   // overshoot; a heading error peaks as an offset after 0.1 m. Stiffer gains barely help (the
   // remaining error comes from the curvature fit and dead reckoning) but amplify detector noise
   // and the one-frame lag (2.3 cm of travel per frame at 0.7 m/s and 30 Hz).
-  double heading_gain = 20.0;   // 1/m per unit sin(theta_e)
-  double lateral_gain = 100.0;  // 1/m^2: curvature per metre of e_y
+  double heading_gain = FollowerDefaults::heading_gain;  // 1/m per unit sin(theta_e)
+  double lateral_gain = FollowerDefaults::lateral_gain;  // 1/m^2: curvature per metre of e_y
 
   // m of path fitted around the base (offset, heading, curvature). Longer is steadier (the
   // curvature's noise falls as fit_length^-2.5 at a given point spacing) but smooths a sudden
@@ -104,9 +104,9 @@ struct SteeringConfig {
 
   // Limits of pd and path (the lecture's law has the lecture's constants). path slows below
   // max_linear (not below min_linear) so that its arc needs at most max_angular.
-  double max_linear = 0.3;   // m/s, top speed
-  double min_linear = 0.05;  // m/s, speed floor while following
-  double max_angular = 1.5;  // rad/s
+  double max_linear = FollowerDefaults::max_linear;    // m/s, top speed
+  double min_linear = FollowerDefaults::min_linear;    // m/s, speed floor while following
+  double max_angular = FollowerDefaults::max_angular;  // rad/s
   // Bands whose detector confidence is below this count as not seeing the line (pd and path).
   double min_confidence = 0.2;
 

@@ -9,6 +9,7 @@ shutdown a last zero.
 """
 
 import argparse
+import math
 import sys
 import time
 
@@ -44,6 +45,20 @@ def configured(make, params, prefix="", **fixed):
         which = f" ({', '.join(names.values())})" if names else ""
         rospy.logfatal(f"invalid parameter{which}: {error}")
         sys.exit(2)
+
+
+def camera_geometry(info):
+    """core.CameraGeometry of a CameraInfo's K and the mounting ~params the C++ nodes read
+    (~camera_height m, ~camera_pitch_deg down positive, ~camera_x_offset m; defaults: the core's).
+    Raises ValueError for unusable intrinsics."""
+    default = core.CameraGeometry()
+    fx, _, cx, _, fy, cy = info.K[:6]
+    pitch_deg = rospy.get_param("~camera_pitch_deg", math.degrees(default.pitch_rad))
+    return core.CameraGeometry(
+        fx=fx, fy=fy, cx=cx, cy=cy, height_m=rospy.get_param("~camera_height", default.height_m),
+        pitch_rad=math.radians(pitch_deg),
+        x_offset_m=rospy.get_param("~camera_x_offset", default.x_offset_m),
+    )
 
 
 def subscribe_frames(callback):

@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "follow_bot/config_checks.h"
+#include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {
 namespace {

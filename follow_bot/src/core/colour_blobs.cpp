@@ -7,7 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "follow_bot/config_checks.h"
+#include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {
 namespace {

@@ -3,9 +3,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "follow_bot/config_checks.h"
 #include "follow_bot/line_controller.h"
 #include "follow_bot/line_path.h"
+#include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {
 namespace {

@@ -19,8 +19,8 @@
 #include "follow_bot/BeaconDetections.h"
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 
 namespace follow_bot {
 
@@ -88,8 +88,8 @@ Settings coreSettings(const BeaconChaserConfig& cfg, const BeaconControllerConfi
   return settings;
 }
 
-// What only start-up sets: the target object and the camera mounting (intrinsics arrive with
-// camera_info). Throws std::invalid_argument naming the first bad value.
+// What only start-up sets: the target object. Throws std::invalid_argument naming the first bad
+// value.
 BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
   BeaconControllerConfig controller;
   const std::string shape = param<std::string>(pnh, "target_shape", "box");
@@ -99,7 +99,6 @@ BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
   }
   controller.target.shape = *parsed_shape;
   controller.target.size_m = positiveParam(pnh, "target_size", controller.target.size_m);
-  controller.camera = readCameraMounting(pnh, controller.camera);
   return controller;
 }
 
@@ -115,7 +114,6 @@ class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
  private:
   void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const BeaconChaserConfig&) override {
     startup_ = readStartupConfig(pnh);
-    camera() = startup_.camera;
   }
 
   // New settings, or new intrinsics (ranges need them), start with fresh controller state (a new

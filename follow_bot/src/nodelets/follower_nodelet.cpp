@@ -15,9 +15,9 @@
 #include "follow_bot/FollowerConfig.h"
 #include "follow_bot/LineStatus.h"
 #include "follow_bot/line_detector.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/steering_law.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 
 namespace follow_bot {
 
@@ -69,7 +69,6 @@ Settings coreSettings(const FollowerConfig& cfg) {
 class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
  private:
   void setup(ros::NodeHandle& nh, ros::NodeHandle& pnh, const FollowerConfig&) override {
-    camera() = readCameraMounting(pnh);
     use_odom_ = param(pnh, "use_odom", false);
     if (use_odom_) {
       odom_sub_ = subscribe<nav_msgs::Odometry>(nh, "odom", [this](const nav_msgs::Odometry& odom) {

@@ -1,7 +1,7 @@
 // Panorama: on a ~capture call the robot turns in place through a set of headings, grabs a
 // frame at each, stitches them and publishes the panorama (latched) on ~panorama.
 //
-// Thin wiring around image_converter's PanoramaCapture (the turn schedule) and stitching core;
+// Thin wiring around PanoramaCapture (the turn schedule) and stitchCapture (the stitch);
 // BehaviourNodelet adds the camera topics, frame checks, limits, the frame watchdog, ~enable,
 // ~status and the final stop. One camera frame in, one status out; a Twist only during a
 // capture (idle otherwise: no cmd_vel at all).
@@ -27,25 +27,16 @@
 #include <std_srvs/Trigger.h>
 
 #include "follow_bot/PanoramaConfig.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
+#include "follow_bot/panorama_capture.h"
+#include "follow_bot/panorama_stitch.h"
 #include "follow_bot/ros/nodelets.h"
-#include "image_converter/panorama_capture.h"
-#include "image_converter/stitching.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 
 namespace follow_bot {
-
-using image_converter::MatchOptions;
-using image_converter::PanoramaCapture;
-using image_converter::PanoramaCaptureConfig;
-using image_converter::StitchResult;
-using image_converter::TurningCamera;
-using image_converter::wrapAngle;
 
 namespace {
 
 constexpr double kPi = 3.141592653589793;
-
-enum class StitchMethod { kAuto, kFeatures, kRotation };
 
 // "<rule>, got <a> and <b>" unless `ok`: a rule linking two ~params, for a start-up error.
 void requireLinked(bool ok, const std::string& rule, double a, double b) {
@@ -57,7 +48,7 @@ void requireLinked(bool ok, const std::string& rule, double a, double b) {
 
 double yawOf(const nav_msgs::Odometry& odom) {
   const geometry_msgs::Quaternion& q = odom.pose.pose.orientation;
-  return image_converter::yawOfQuaternion(q.x, q.y, q.z, q.w);
+  return yawOfQuaternion(q.x, q.y, q.z, q.w);
 }
 
 }  // namespace
@@ -73,13 +64,6 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   }
 
  private:
-  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const PanoramaConfig&) override {
-    camera().pitch_rad = param(pnh, "camera_pitch_deg", 0.0) * kPi / 180.0;
-    if (!(std::abs(camera().pitch_rad) < 1.5)) {
-      throw std::invalid_argument("~camera_pitch_deg must be within +-85 deg");
-    }
-  }
-
   // Ranges are the .cfg's (readConfig checks them); the rules linking two ~params are here.
   void configure(const PanoramaConfig& cfg) override {
     requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,
@@ -106,16 +90,12 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
     }
     match_options_.min_inliers = cfg.min_inliers;
 
-    if (cfg.stitch_method == "auto") {
-      method_ = StitchMethod::kAuto;
-    } else if (cfg.stitch_method == "features") {
-      method_ = StitchMethod::kFeatures;
-    } else if (cfg.stitch_method == "rotation") {
-      method_ = StitchMethod::kRotation;
-    } else {
+    const std::optional<StitchMethod> method = parseStitchMethod(cfg.stitch_method);
+    if (!method) {
       throw std::invalid_argument("~stitch_method must be auto, features or rotation, got '" +
                                   cfg.stitch_method + "'");
     }
+    method_ = *method;
     frame_timeout_ = cfg.frame_timeout;
     capture_timeout_ = cfg.capture_timeout;
   }
@@ -244,46 +224,15 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   }
 
   Outcome stitchAndPublish(const std_msgs::Header& header) {
-    const double span_deg = std::abs(wrapAngle(yaws_.front() - yaws_.back())) * 180.0 / kPi;
-    std::string notes;
-    StitchResult result;
-    std::string used;
-    if (method_ != StitchMethod::kRotation) {
-      result = stitchMany(frames_, match_options_);
-      used = "features (cv::Stitcher, " + detectorName(match_options_.detector) + ")";
-      if (result.ok()) result.error = checkWidth(result.panorama.cols);
-      if (!result.ok() && method_ == StitchMethod::kAuto) {
-        notes = "; feature stitching failed (" + result.error + "), used the odometry yaws";
-      }
-    }
-    if (method_ == StitchMethod::kRotation || (method_ == StitchMethod::kAuto && !result.ok())) {
-      const CameraGeometry& c = camera();
-      result = stitchByRotation(frames_, yaws_, TurningCamera{c.fx, c.fy, c.cx, c.cy, c.pitch_rad});
-      used = "rotation (odometry yaws)";
-    }
-    if (!result.ok()) return {false, "stitching failed: " + result.error};
-    cv_bridge::CvImage image(header, "bgr8", result.panorama);
-    panorama_pub_.publish(image.toImageMsg());
-    char summary[160];
-    std::snprintf(summary, sizeof summary, "%d x %d px from %zu frames over %.0f deg by ",
-                  result.panorama.cols, result.panorama.rows, frames_.size(), span_deg);
-    return {true, summary + used + notes};
-  }
-
-  // A feature panorama must be about as wide as the turn says: fx * (span + field of view).
-  // Wrong links between look-alike views give panoramas of the wrong width.
-  std::string checkWidth(int width) const {
-    const double span = std::abs(wrapAngle(yaws_.front() - yaws_.back()));
-    const double fov = 2.0 * std::atan(frames_.front().cols / (2.0 * camera().fx));
-    const double expected = camera().fx * (span + fov);
-    if (std::abs(width - expected) <= 0.15 * expected) return "";
-    return "panorama " + std::to_string(width) + " px wide where the turn predicts " +
-           std::to_string(static_cast<int>(expected)) + " px";
+    const CaptureStitch stitched = stitchCapture(frames_, yaws_, camera(), match_options_, method_);
+    if (stitched.ok())
+      panorama_pub_.publish(cv_bridge::CvImage(header, "bgr8", stitched.panorama).toImageMsg());
+    return {stitched.ok(), stitched.message};
   }
 
   std::condition_variable_any changed_;  // with mutex(): a capture's outcome
   std::unique_ptr<PanoramaCapture> capture_;
-  MatchOptions match_options_;
+  image_converter::MatchOptions match_options_;
   StitchMethod method_ = StitchMethod::kAuto;
   std::optional<double> yaw_;
   double frame_timeout_ = 1.0;

@@ -23,10 +23,10 @@
 #include "follow_bot/ParkerConfig.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot/parking_servo.h"
-#include "follow_bot/ros/behaviour_nodelet.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/tag_detector.h"
+#include "follow_bot_common/ros/behaviour_nodelet.h"
 
 namespace follow_bot {
 
@@ -110,9 +110,6 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
 
  private:
   void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const ParkerConfig& config) override {
-    CameraGeometry level;  // ~camera_pitch_deg defaults to 0
-    level.pitch_rad = 0.0;
-    camera() = readCameraMounting(pnh, level);
     NODELET_INFO("parking in front of the %s at %.2f m", config.target.c_str(), config.standoff);
   }
 

@@ -9,12 +9,12 @@
 #include <nodelet/nodelet.h>
 #include <sensor_msgs/Image.h>
 
+#include "follow_bot_common/ros/checked_nodelet.h"
 #include "image_converter/overlay.h"
-#include "image_converter/ros/checked_nodelet.h"
 
 namespace image_converter {
 
-class ImageConverterNodelet : public CheckedNodelet {
+class ImageConverterNodelet : public follow_bot::CheckedNodelet {
  public:
   ~ImageConverterNodelet() override;
 

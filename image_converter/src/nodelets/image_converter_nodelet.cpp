@@ -15,12 +15,12 @@
 #include <opencv2/highgui.hpp>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "follow_bot_common/ros/camera_input.h"
+#include "follow_bot_common/ros/params.h"
+#include "follow_bot_common/ros/topics.h"
 #include "image_converter/ImageConverterConfig.h"
 #include "image_converter/image_converter_nodelet.h"
 #include "image_converter/overlay.h"
-#include "image_converter/ros/frame_msg.h"
-#include "image_converter/ros/params.h"
-#include "image_converter/ros/topics.h"
 
 namespace image_converter {
 
@@ -37,7 +37,8 @@ void ImageConverterNodelet::init() {
   ros::NodeHandle& nh = getNodeHandle();
   ros::NodeHandle& pnh = getPrivateNodeHandle();
 
-  const ImageConverterConfig cfg = readConfig<ImageConverterConfig>(pnh);  // throws on bad ~params
+  const ImageConverterConfig cfg =
+      follow_bot::readConfig<ImageConverterConfig>(pnh);  // throws on bad ~params
   overlay_.radius_px = cfg.circle_radius;
   overlay_.thickness_px = cfg.circle_thickness;
   display_ = cfg.display;
@@ -94,25 +95,25 @@ void ImageConverterNodelet::subscribe() {
                                               getPrivateNodeHandle());
   // Resolved first, so that a remapping of the base name also moves <base>/compressed
   // (image_transport appends the transport's suffix to the name as given).
-  input_ = input_transport_->subscribe(getNodeHandle().resolveName(topics::kImage), 1,
+  input_ = input_transport_->subscribe(getNodeHandle().resolveName(follow_bot::topics::kImage), 1,
                                        &ImageConverterNodelet::onImage, this, hints);
 }
 
 void ImageConverterNodelet::onImage(const sensor_msgs::ImageConstPtr& msg) {
   // Guarded: an exception drops the frame (throttled error), never the node.
-  guardedCallback("image", [&] { handleImage(msg); });
+  follow_bot::guardedCallback("image", [&] { handleImage(msg); });
 }
 
 void ImageConverterNodelet::handleImage(const sensor_msgs::ImageConstPtr& msg) {
-  const RawFrame raw = rawFrameOf(*msg);
-  const FrameCheck check = checkFrame(raw);
+  const follow_bot::RawFrame raw = follow_bot::rawFrameOf(*msg);
+  const follow_bot::FrameCheck check = follow_bot::checkFrame(raw);
   if (!check.ok()) {
     NODELET_ERROR_THROTTLE(1.0, "dropping frame on %s: %s", input_.getTopic().c_str(),
                            check.error.c_str());
     return;
   }
   // The one copy (the overlay must not be drawn into a buffer other subscribers share).
-  cv_bridge::CvImage annotated(msg->header, "bgr8", frameToBgr8(raw, *check.encoding));
+  cv_bridge::CvImage annotated(msg->header, "bgr8", follow_bot::frameToBgr8(raw, *check.encoding));
   drawOverlay(annotated.image, overlay_);
 
   if (output_.getNumSubscribers() > 0) output_.publish(annotated.toImageMsg());

@@ -1,0 +1,211 @@
+// The camera-driven behaviour nodelet: what every behaviour does between its camera topics, its
+// ~params and cmd_vel, so that a behaviour supplies only its cores and one step per frame.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <cv_bridge/cv_bridge.h>
+#include <dynamic_reconfigure/server.h>
+#include <image_transport/image_transport.h>
+#include <nodelet/nodelet.h>
+#include <ros/ros.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <boost/thread/recursive_mutex.hpp>
+
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/ros/camera_input.h"
+#include "follow_bot_common/ros/checked_nodelet.h"
+#include "follow_bot_common/ros/command_output.h"
+#include "follow_bot_common/ros/params.h"
+#include "follow_bot_common/ros/topics.h"
+
+namespace follow_bot {
+
+// One accepted camera frame.
+struct Frame {
+  const std_msgs::Header& header;
+  const cv::Mat& image;  // BGR8, a view of the message: read only
+  double time;           // s: the stamp, or now when it has none (CommandOutput::frameTime)
+};
+
+// A frame's decision (docs/behaviour_contract.md): the desired command before the limits,
+// whether the behaviour steers (active) or not (idle), and its state's name.
+struct Decision {
+  Twist2D desired;
+  bool active = true;
+  std::string state;
+};
+
+// What differs between the behaviours in the shared wiring.
+struct BehaviourOptions {
+  bool allow_reverse = false;    // CommandOutput may command negative linear speeds
+  bool live_reconfigure = true;  // a dynamic_reconfigure server on the ~params
+  bool debug_image = true;       // a ~debug_image topic, drawn only while someone listens
+};
+
+// The nodelet of a behaviour driven by camera frames (`Config`: its generated dynamic_reconfigure
+// config). It owns:
+//  * start-up: the ~params read and checked against the .cfg (readConfig), the camera's mounting
+//    (readCameraMounting: ~camera_height, ~camera_pitch_deg, ~camera_x_offset over
+//    CameraGeometry's defaults, the same for every behaviour), then setup() and
+//    configure(); with live_reconfigure, a dynamic_reconfigure server whose updates go through
+//    the same configure(): a rejected update changes nothing and the server reports back the
+//    settings in force. Any start-up error names the ~param and fails the load (CheckedNodelet).
+//  * `camera/rgb/camera_info` (queue 1; names relative to the namespace, follow_bot_common/ros/
+//    topics.h): usable intrinsics go into camera(), unusable ones are ignored with
+//    a throttled error. A separate subscription, not a CameraSubscriber: a behaviour keeps
+//    running on frames when camera_info is late or missing (then it says what it cannot do).
+//  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
+//  stamp checks;
+//    a bad frame is dropped with a throttled error), then per accepted frame step(), the one
+//    CommandOutput::send (cmd_vel, ~status, watchdog, ~enable, final stop), report() and a lazy
+//    ~debug_image.
+//  * every callback runs guarded (an exception drops the message, never the node) and under
+//    mutex(), the one the dynamic_reconfigure server shares.
+template <typename ConfigT>
+class BehaviourNodelet : public CheckedNodelet {
+ public:
+  using Config = ConfigT;
+
+ protected:
+  explicit BehaviourNodelet(BehaviourOptions options = {}) : options_(options) {}
+
+  // Start-up only settings (targets, topics) before the first configure().
+  // Throws std::invalid_argument naming a bad ~param.
+  virtual void setup(ros::NodeHandle& /*nh*/, ros::NodeHandle& /*pnh*/, const Config& /*config*/) {}
+  // Builds the cores from `config`, at start-up and for every live update; a new configuration
+  // starts with fresh core state. Throws std::invalid_argument naming the first bad value.
+  virtual void configure(const Config& config) = 0;
+  // The behaviour's own topics and services, once output() exists.
+  virtual void advertise(ros::NodeHandle& /*nh*/, ros::NodeHandle& /*pnh*/) {}
+  // Usable intrinsics arrived in camera(); `changed`: the first ones or different from before.
+  // By default the cores are rebuilt from the settings in force when they change.
+  virtual void intrinsicsArrived(bool changed) {
+    if (changed) configure(applied_config_);
+  }
+  // One accepted frame: what the behaviour wants the robot to do.
+  virtual Decision step(const Frame& frame) = 0;
+  // After the frame's command went out (`sent`: what the robot was told, zero when quiet).
+  virtual void report(const Frame& /*frame*/, const Twist2D& /*sent*/) {}
+  // Draws the last step's findings on a copy of its frame (only while ~debug_image has a
+  // subscriber).
+  virtual void drawDebug(cv::Mat& /*canvas*/) {}
+
+  const CameraGeometry& camera() const { return camera_; }  // mounting and latest intrinsics
+  bool hasIntrinsics() const { return has_intrinsics_; }
+  const std::string& cameraInfoTopic() const { return camera_info_topic_; }
+  const std::string& imageTopic() const { return image_topic_; }
+  CommandOutput& output() { return *output_; }
+  boost::recursive_mutex& mutex() { return mutex_; }
+
+  // Subscribes `handle(const M&)` to `topic` (queue 1), guarded and under mutex() like the
+  // camera callbacks.
+  template <typename M, typename Handle>
+  ros::Subscriber subscribe(ros::NodeHandle& nh, const std::string& topic, Handle handle) {
+    return nh.subscribe<M>(topic, 1, [this, topic, handle](const boost::shared_ptr<const M>& msg) {
+      guardedCallback(topic.c_str(), [&] {
+        std::lock_guard<boost::recursive_mutex> lock(mutex_);
+        handle(*msg);
+      });
+    });
+  }
+
+ private:
+  void init() final {
+    ros::NodeHandle& nh = getNodeHandle();
+    ros::NodeHandle& pnh = getPrivateNodeHandle();
+    std::lock_guard<boost::recursive_mutex> lock(mutex_);
+    applied_config_ = readConfig<Config>(pnh);  // throws on bad ~params
+    camera_ = readCameraMounting(pnh);
+    setup(nh, pnh, applied_config_);
+    configure(applied_config_);
+    output_ = std::make_unique<CommandOutput>(nh, pnh, options_.allow_reverse);
+    if (options_.live_reconfigure) {
+      reconfigure_ = std::make_unique<dynamic_reconfigure::Server<Config>>(mutex_, pnh);
+      reconfigure_->setCallback([this](Config& config, uint32_t) { reconfigure(config); });
+    }
+    advertise(nh, pnh);
+    if (options_.debug_image) {
+      debug_pub_ = image_transport::ImageTransport(pnh).advertise("debug_image", 1);
+    }
+    camera_info_sub_ = subscribe<sensor_msgs::CameraInfo>(
+        nh, topics::kCameraInfo,
+        [this](const sensor_msgs::CameraInfo& info) { onCameraInfo(info); });
+    camera_info_topic_ = camera_info_sub_.getTopic();
+    // ~image_transport (e.g. compressed) read from this nodelet's private namespace, also when
+    // it runs in a manager. The base name is resolved first so that a remapping of it also moves
+    // the transport's topic (<base>/compressed): image_transport appends to the name as given.
+    const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
+    image_sub_ = image_transport::ImageTransport(nh).subscribe(
+        nh.resolveName(topics::kImage), 1, &BehaviourNodelet::onImage, this,
+        hints);
+    image_topic_ = image_sub_.getTopic();
+  }
+
+  // Called with mutex_ held by the dynamic_reconfigure server.
+  void reconfigure(Config& config) {
+    const std::string error =
+        applyOrKeep(config, applied_config_, [this](const Config& c) { configure(c); });
+    if (!error.empty()) {
+      NODELET_WARN("rejected reconfiguration, keeping the previous settings: %s", error.c_str());
+    }
+  }
+
+  void onCameraInfo(const sensor_msgs::CameraInfo& info) {
+    bool changed = false;
+    const std::string error = updateIntrinsics(info, camera_, changed);
+    if (!error.empty()) {
+      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
+      return;
+    }
+    changed = changed || !has_intrinsics_;
+    has_intrinsics_ = true;
+    intrinsicsArrived(changed);
+  }
+
+  void onImage(const sensor_msgs::ImageConstPtr& msg) {
+    guardedCallback("image", [&] { handleImage(msg); });
+  }
+
+  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
+    std::lock_guard<boost::recursive_mutex> lock(mutex_);
+    std::string error;
+    const cv_bridge::CvImageConstPtr image = bgrView(msg, error);
+    if (!image) {
+      NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
+      output_->frameDropped(error);
+      return;
+    }
+    // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
+    output_->frameArrived();
+    const Frame frame{msg->header, image->image, CommandOutput::frameTime(msg->header).toSec()};
+    const Decision decision = step(frame);
+    const Twist2D sent =
+        output_->send(msg->header, decision.desired, decision.active, decision.state);
+    report(frame, sent);
+    if (options_.debug_image && debug_pub_.getNumSubscribers() > 0) {
+      cv_bridge::CvImage debug(msg->header, "bgr8", image->image.clone());
+      drawDebug(debug.image);
+      debug_pub_.publish(debug.toImageMsg());
+    }
+  }
+
+  const BehaviourOptions options_;
+  boost::recursive_mutex mutex_;  // the type dynamic_reconfigure::Server shares
+  Config applied_config_;         // the settings in force, reported back after a rejected update
+  CameraGeometry camera_;
+  bool has_intrinsics_ = false;
+  std::string camera_info_topic_;
+  std::string image_topic_;
+  // Declared first among the ROS handles: destroyed last, it sends the final stop.
+  std::unique_ptr<CommandOutput> output_;
+  std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_;
+  image_transport::Publisher debug_pub_;
+  ros::Subscriber camera_info_sub_;
+  image_transport::Subscriber image_sub_;
+};
+
+}  // namespace follow_bot

@@ -1,0 +1,85 @@
+// Camera input: glue between sensor_msgs/Image and the ROS-free frame checks (the one way every
+// node in the project accepts a camera frame), camera_info to intrinsics, and the last-resort
+// guard around every callback.
+#pragma once
+
+#include <exception>
+#include <string>
+
+#include <cv_bridge/cv_bridge.h>
+#include <ros/console.h>
+#include <sensor_msgs/CameraInfo.h>
+#include <sensor_msgs/Image.h>
+#include <sensor_msgs/image_encodings.h>
+#include <boost/make_shared.hpp>
+
+#include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/image_frame.h"
+
+namespace follow_bot {
+
+inline RawFrame rawFrameOf(const sensor_msgs::Image& msg) {
+  RawFrame frame;
+  frame.width = msg.width;
+  frame.height = msg.height;
+  frame.encoding = msg.encoding;
+  frame.big_endian = msg.is_bigendian != 0;
+  frame.step = msg.step;
+  frame.data = msg.data.data();
+  frame.data_size = msg.data.size();
+  frame.stamp_sec = msg.header.stamp.sec;
+  frame.stamp_nsec = msg.header.stamp.nsec;
+  return frame;
+}
+
+// The frame as BGR8 after checkFrame (a view of the message, no copy, when it is bgr8; a fresh
+// image otherwise), or null with `error` set for a frame that fails the checks. No cv_bridge
+// conversion: checkFrame already holds everything toBgr8 relies on.
+inline cv_bridge::CvImageConstPtr bgrView(const sensor_msgs::ImageConstPtr& msg,
+                                          std::string& error) {
+  const RawFrame raw = rawFrameOf(*msg);
+  const FrameCheck check = checkFrame(raw);
+  if (!check.ok()) {
+    error = check.error;
+    return nullptr;
+  }
+  if (*check.encoding == Encoding::kBgr8) {
+    return cv_bridge::toCvShare(*msg, msg, sensor_msgs::image_encodings::BGR8);
+  }
+  return boost::make_shared<cv_bridge::CvImage>(msg->header, sensor_msgs::image_encodings::BGR8,
+                                                frameToBgr8(raw, *check.encoding));
+}
+
+// Runs one callback's work. An exception escaping it (cv::Exception, std::exception: a case the
+// checks missed) must not end the process: it is logged, throttled per call site, and the
+// message is dropped. Returns false when that happened.
+template <typename Work>
+bool guardedCallback(const char* what, Work&& work) {
+  try {
+    work();
+    return true;
+  } catch (const std::exception& error) {
+    ROS_ERROR_THROTTLE(1.0, "%s: dropped after an unexpected error: %s", what, error.what());
+  }
+  return false;
+}
+
+// Copies CameraInfo's K into `camera` when it is usable. Returns "" on success, otherwise why
+// the message was ignored (`camera` then unchanged). `changed` tells whether the intrinsics
+// differ from before.
+inline std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, CameraGeometry& camera,
+                                    bool& changed) {
+  CameraGeometry updated = camera;
+  updated.fx = info.K[0];
+  updated.fy = info.K[4];
+  updated.cx = info.K[2];
+  updated.cy = info.K[5];
+  const std::string error = validate(updated);
+  if (!error.empty()) return error;
+  changed = updated.fx != camera.fx || updated.fy != camera.fy || updated.cx != camera.cx ||
+            updated.cy != camera.cy;
+  camera = updated;
+  return "";
+}
+
+}  // namespace follow_bot

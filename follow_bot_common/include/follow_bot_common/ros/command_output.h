@@ -1,0 +1,113 @@
+// The one way a behaviour node commands the base: limits, active/idle, ~enable, the per-frame
+// ~status, a frame watchdog and a final stop.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <diagnostic_updater/update_functions.h>
+#include <ros/ros.h>
+#include <std_msgs/Header.h>
+#include <std_srvs/SetBool.h>
+
+#include "follow_bot_common/frame_watchdog.h"
+#include "follow_bot_common/velocity_limiter.h"
+
+namespace follow_bot {
+
+// Publishes geometry_msgs/Twist on `cmd_vel` through a VelocityLimiter while the behaviour is
+// active (docs/behaviour_contract.md):
+//  * send() once per processed frame, saying whether the behaviour steers (active) or not
+//    (idle). Active: the limited command goes out. Idle: the limited command goes out until it
+//    reaches zero (the limiter's ramp down, exactly as while active), that one zero included,
+//    then nothing until the behaviour is active again. A node that starts idle sends nothing.
+//  * ~enable (std_srvs/SetBool): false publishes one zero at once and keeps the node idle
+//    whatever it sees (the limiter ramps up from zero after true).
+//  * ~status (follow_bot_msgs/BehaviourStatus): one per send(), stamped with the frame's stamp:
+//    state, active, whether a command went out and which. The lockstep simulator waits for it.
+// Two watchdogs, one zero Twist per outage between them (none when already stopped), then
+// nothing until frames return; the destructor publishes a last zero and holds the publisher
+// 0.1 s of wall time so that it leaves. The watchdogs:
+//  * ROS time: no frame for ~watchdog_timeout of ROS time (sim time under use_sim_time).
+//  * Wall (steady) time: no frame for ~watchdog_timeout of wall time while ROS time has not
+//    advanced for ~watchdog_timeout of wall time either. With use_sim_time, when /clock and the
+//    frames stop together (the simulator or rosbag died), ROS time stands still and the first rule
+//    never fires. A running ROS clock leaves the decision to the first rule (sim time may run at
+//    any rate).
+//
+// Diagnostics: one diagnostic_updater status per node on /diagnostics ("<node>: behaviour"):
+// frame rate against ~expected_frame_rate (Hz, 30; +-20 %), frames accepted, frames dropped
+// by reason, watchdog stops (and on which clock), the behaviour's state; ERROR while stopped by
+// the watchdog, WARN when frames were dropped since the last report. Period ~diagnostic_period.
+//
+// Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
+// ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
+// ~watchdog_timeout (s, 0.15). Invalid values throw std::invalid_argument. Negative linear
+// commands are clamped to 0 unless `allow_reverse` (a behaviour that must back up, the parker).
+class CommandOutput {
+ public:
+  CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse = false);
+  ~CommandOutput();
+  CommandOutput(const CommandOutput&) = delete;
+  CommandOutput& operator=(const CommandOutput&) = delete;
+
+  // The time a frame stands for: its stamp, or now when it has none.
+  static ros::Time frameTime(const std_msgs::Header& header);
+
+  // Records that a usable frame arrived now.
+  void frameArrived();
+  // Records a frame dropped by the checks; `reason` is the check's message.
+  void frameDropped(const std::string& reason);
+  // One processed frame's decision. Limits `desired` (acceleration against the previous send,
+  // frameTime(frame) being the frame's time), publishes it per the active/idle rules above and
+  // publishes the frame's ~status; `state` names the behaviour's state (status, diagnostics).
+  // Returns the limited command: what the robot was told, or zero when quiet. Any stamps are
+  // safe: the time since the previous send is taken as at most ~watchdog_timeout, and as none
+  // when it runs backwards.
+  Twist2D send(const std_msgs::Header& frame, const Twist2D& desired, bool active,
+               const std::string& state);
+  // Stops now: an immediate zero, unless already stopped (then nothing: cmd_vel stays quiet).
+  void stop();
+
+ private:
+  void stopLocked();
+  void publish(const Twist2D& command);
+  bool onEnable(std_srvs::SetBool::Request& request, std_srvs::SetBool::Response& response);
+  void checkWatchdog(const ros::TimerEvent&);
+  void checkWatchdogNow();
+  void checkWallWatchdog(const ros::SteadyTimerEvent&);
+  void stopForOutage(const char* clock, double since, double now);
+  void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
+
+  std::mutex mutex_;  // frames, ~enable and the watchdog timers may run on different threads
+  ros::Publisher publisher_;
+  ros::Publisher status_pub_;
+  ros::ServiceServer enable_srv_;
+  bool enabled_ = true;
+  bool quiet_ = true;  // the last command published (or none yet) is a zero: idle sends nothing
+  ros::Timer timer_;
+  ros::SteadyTimer wall_timer_;
+  VelocityLimiter limiter_;
+  FrameWatchdog watchdog_;          // on ROS time
+  FrameWatchdog wall_watchdog_;     // on steady time
+  double ros_time_seen_ = -1.0;     // ROS time at the last wall check
+  double ros_time_moved_at_ = 0.0;  // steady time when it last changed
+  bool outage_stopped_ = false;     // one stop per outage, whichever watchdog sees it first
+
+  diagnostic_updater::Updater updater_;
+  double expected_rate_ = 30.0;  // min = max for FrequencyStatus (it keeps pointers)
+  std::unique_ptr<diagnostic_updater::FrequencyStatus> frame_rate_;
+  std::string state_ = "starting";
+  long frames_ = 0;
+  std::map<std::string, long> dropped_;  // by reason
+  long dropped_since_report_ = 0;
+  long watchdog_stops_ = 0;
+  std::string last_stop_clock_ = "none";
+  ros::Time last_stamp_;
+  int frames_since_check_ = 0;
+};
+
+}  // namespace follow_bot

@@ -1,0 +1,167 @@
+#include "follow_bot_common/ground_projection.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace follow_bot {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double degrees(double deg) { return deg * kPi / 180.0; }
+
+CameraGeometry harnessCamera() {
+  CameraGeometry camera;
+  camera.fx = camera.fy = 554.256;
+  camera.cx = 320.0;
+  camera.cy = 240.0;
+  camera.height_m = 0.3;
+  camera.pitch_rad = degrees(20.0);
+  camera.x_offset_m = 0.0;
+  return camera;
+}
+
+// An independent forward model, written from the conventions in the header: the optical axes
+// expressed in base_link, then the pinhole. Returns (u, v, depth along the optical axis).
+cv::Point3d project(const CameraGeometry& camera, const cv::Point2d& ground) {
+  const double p = camera.pitch_rad;
+  const cv::Vec3d z_axis(std::cos(p), 0.0, -std::sin(p));
+  const cv::Vec3d x_axis(0.0, -1.0, 0.0);
+  const cv::Vec3d y_axis = z_axis.cross(x_axis);
+  const cv::Vec3d from_camera(ground.x - camera.x_offset_m, ground.y, -camera.height_m);
+  const double depth = from_camera.dot(z_axis);
+  return cv::Point3d(camera.cx + camera.fx * from_camera.dot(x_axis) / depth,
+                     camera.cy + camera.fy * from_camera.dot(y_axis) / depth, depth);
+}
+
+TEST(GroundProjection, CentrePixelLandsOnTheOpticalAxis) {
+  for (double pitch_deg : {5.0, 20.0, 45.0, 80.0}) {
+    CameraGeometry camera = harnessCamera();
+    camera.pitch_rad = degrees(pitch_deg);
+    camera.x_offset_m = 0.12;
+    const auto ground = pixelToGround(camera, camera.cx, camera.cy);
+    ASSERT_TRUE(ground) << pitch_deg;
+    EXPECT_NEAR(ground->x, 0.12 + 0.3 / std::tan(camera.pitch_rad), 1e-12) << pitch_deg;
+    EXPECT_NEAR(ground->y, 0.0, 1e-15);
+  }
+}
+
+TEST(GroundProjection, HandComputedOffAxisPixel) {
+  // Pitch 45 deg, 1 m up, one focal length right of centre: the optical ray (1, 0, 1) is
+  // (cos 45, -1, -sin 45) in base_link and meets the floor after sqrt(2): at (1, -sqrt(2)).
+  CameraGeometry camera = harnessCamera();
+  camera.pitch_rad = degrees(45.0);
+  camera.height_m = 1.0;
+  const auto ground = pixelToGround(camera, camera.cx + camera.fx, camera.cy);
+  ASSERT_TRUE(ground);
+  EXPECT_NEAR(ground->x, 1.0, 1e-12);
+  EXPECT_NEAR(ground->y, -std::sqrt(2.0), 1e-12);
+}
+
+TEST(GroundProjection, ImageRightIsRobotRightAndLowerRowsAreCloser) {
+  const CameraGeometry camera = harnessCamera();
+  const auto right = pixelToGround(camera, 500.0, 370.0);
+  const auto left = pixelToGround(camera, 100.0, 370.0);
+  const auto lower = pixelToGround(camera, 320.0, 470.0);
+  const auto centre = pixelToGround(camera, 320.0, 370.0);
+  ASSERT_TRUE(right && left && lower && centre);
+  EXPECT_LT(right->y, 0.0);
+  EXPECT_GT(left->y, 0.0);
+  EXPECT_NEAR(right->x, left->x, 1e-12) << "a row maps to a line across the robot";
+  EXPECT_LT(lower->x, centre->x);
+}
+
+TEST(GroundProjection, TheLectureBandSeesAboutHalfAMetreAhead) {
+  // Rows 360..379 of the harness camera: centroid row 369.5, angle 20 + atan(129.5 / fy) deg.
+  const auto ground = pixelToGround(harnessCamera(), 320.0, 369.5);
+  ASSERT_TRUE(ground);
+  EXPECT_NEAR(ground->x, 0.3 / std::tan(degrees(20.0) + std::atan(129.5 / 554.256)), 1e-12);
+  EXPECT_NEAR(ground->x, 0.459, 0.001);
+}
+
+TEST(GroundProjection, NothingAtOrAboveTheHorizon) {
+  const CameraGeometry camera = harnessCamera();
+  const double horizon_row = camera.cy - camera.fy * std::tan(camera.pitch_rad);
+  EXPECT_FALSE(pixelToGround(camera, 320.0, horizon_row - 1.0));
+  EXPECT_FALSE(pixelToGround(camera, 320.0, 0.0));
+  const auto just_below = pixelToGround(camera, 320.0, horizon_row + 0.5);
+  ASSERT_TRUE(just_below);
+  EXPECT_GT(just_below->x, 10.0);
+
+  CameraGeometry level = camera;
+  level.pitch_rad = 0.0;
+  EXPECT_FALSE(pixelToGround(level, 320.0, level.cy));
+  EXPECT_TRUE(pixelToGround(level, 320.0, level.cy + 1.0));
+
+  CameraGeometry looking_up = camera;
+  looking_up.pitch_rad = degrees(-10.0);
+  EXPECT_FALSE(pixelToGround(looking_up, 320.0, 300.0));
+  EXPECT_TRUE(pixelToGround(looking_up, 320.0, 479.0));
+}
+
+TEST(GroundProjection, NonFiniteInputHasNoGroundPoint) {
+  const CameraGeometry camera = harnessCamera();
+  EXPECT_FALSE(pixelToGround(camera, kNaN, 400.0));
+  EXPECT_FALSE(pixelToGround(camera, 320.0, kNaN));
+  EXPECT_FALSE(pixelToGround(camera, std::numeric_limits<double>::infinity(), 400.0));
+}
+
+TEST(GroundProjection, RoundTripsWithAnIndependentProjection) {
+  CameraGeometry camera;
+  camera.fx = 600.0;
+  camera.fy = 580.0;
+  camera.cx = 331.5;
+  camera.cy = 229.25;
+  camera.height_m = 0.42;
+  camera.x_offset_m = -0.07;
+  for (double pitch_deg : {-20.0, 0.0, 12.0, 35.0, 70.0}) {
+    camera.pitch_rad = degrees(pitch_deg);
+    for (double u = 0.0; u < 640.0; u += 37.5) {
+      for (double v = 0.0; v < 480.0; v += 21.25) {
+        const auto ground = pixelToGround(camera, u, v);
+        if (!ground) {
+          // Only pixels at or above the horizon miss the floor.
+          EXPECT_LE(v, camera.cy - camera.fy * std::tan(camera.pitch_rad) + 1e-9);
+          continue;
+        }
+        const cv::Point3d pixel = project(camera, *ground);
+        EXPECT_GT(pixel.z, 0.0);
+        EXPECT_NEAR(pixel.x, u, 1e-6) << pitch_deg << " " << u << " " << v;
+        EXPECT_NEAR(pixel.y, v, 1e-6) << pitch_deg << " " << u << " " << v;
+      }
+    }
+  }
+}
+
+TEST(GroundProjection, ValidateNamesTheBadField) {
+  EXPECT_EQ(validate(harnessCamera()), "");
+  EXPECT_EQ(validate(CameraGeometry()), "") << "the defaults are the harness camera";
+  CameraGeometry camera = harnessCamera();
+  camera.fx = 0.0;
+  EXPECT_NE(validate(camera).find("fx"), std::string::npos);
+  camera = harnessCamera();
+  camera.fy = kNaN;
+  EXPECT_NE(validate(camera).find("fy"), std::string::npos);
+  camera = harnessCamera();
+  camera.cy = std::numeric_limits<double>::infinity();
+  EXPECT_NE(validate(camera).find("cy"), std::string::npos);
+  camera = harnessCamera();
+  camera.height_m = -0.3;
+  EXPECT_NE(validate(camera).find("height_m"), std::string::npos);
+  camera = harnessCamera();
+  camera.pitch_rad = degrees(89.5);
+  EXPECT_NE(validate(camera).find("pitch_rad"), std::string::npos);
+  camera.pitch_rad = degrees(-89.5);
+  EXPECT_NE(validate(camera).find("pitch_rad"), std::string::npos);
+  camera.pitch_rad = degrees(88.0);
+  EXPECT_EQ(validate(camera), "");
+  camera.x_offset_m = kNaN;
+  EXPECT_NE(validate(camera).find("x_offset_m"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace follow_bot

@@ -1,0 +1,93 @@
+"""Each parameter default is written once, in its .cfg: launch files and config YAML leave a
+parameter unset (an empty arg) rather than repeat its default, and the cores whose Config
+structs take their defaults from the generated <Name>Defaults.h (generate_cfg_defaults) hold no
+literal initialisers of their own."""
+
+import re
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+import yaml
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "follow_bot_common" / "cmake"))
+from cfg_defaults import read_cfg  # noqa: E402
+
+CFGS = sorted(p for p in REPO.glob("*/cfg/*.cfg"))
+# Cores whose defaults come from a generated header, by the .cfg they come from.
+GENERATED = {
+    "follow_bot/cfg/BeaconChaser.cfg": [
+        "follow_bot/include/follow_bot/beacon_controller.h",
+        "follow_bot/include/follow_bot/colour_blobs.h",
+    ],
+    "follow_bot/cfg/Follower.cfg": [
+        "follow_bot/include/follow_bot/line_detector.h",
+        "follow_bot/include/follow_bot/steering_law.h",
+    ],
+    "follow_bot/cfg/Parker.cfg": ["follow_bot/include/follow_bot/parking_servo.h"],
+    "follow_bot/cfg/Panorama.cfg": ["follow_bot/include/follow_bot/panorama_capture.h"],
+}
+CONFIG_STRUCT = re.compile(r"^struct \w*Config \{\n(.*?)^\};", re.M | re.S)
+LITERAL_INITIALISER = re.compile(
+    r"^\s*(?:double|float|int|bool|std::string)\s+(\w+)\s*=\s*"
+    r"(?:-?[\d.]+(?:e-?\d+)?|true|false|\".*\")\s*;",
+    re.M,
+)
+
+
+def same(text: str, default) -> bool:
+    if isinstance(default, bool):
+        return text.strip().lower() == str(default).lower()
+    if isinstance(default, int | float):
+        try:
+            return float(text) == float(default)
+        except ValueError:
+            return False
+    return text == default
+
+
+def defaults() -> dict[str, object]:
+    found = {}
+    for cfg in CFGS:
+        for param in read_cfg(cfg):
+            found.setdefault(param["name"], []).append(param["default"])
+    return found
+
+
+def repeated_in_launch(path: Path, known: dict) -> list[str]:
+    repeats = []
+    for element in ET.parse(path).getroot().iter():
+        name = element.get("name")
+        value = element.get("default") if element.tag == "arg" else element.get("value")
+        if element.tag not in ("arg", "param") or name not in known or value in (None, ""):
+            continue
+        if "$(" not in value and any(same(value, d) for d in known[name]):
+            repeats.append(f"{path.relative_to(REPO)}: {name}={value}")
+    return repeats
+
+
+def test_launch_files_and_yaml_do_not_repeat_cfg_defaults():
+    known = defaults()
+    repeats = []
+    for path in sorted(REPO.glob("*/launch/*.launch")):
+        repeats += repeated_in_launch(path, known)
+    for path in sorted(REPO.glob("*/config/*.yaml")):
+        for name, value in (yaml.safe_load(path.read_text()) or {}).items():
+            if name in known and any(same(str(value), d) for d in known[name]):
+                repeats.append(f"{path.relative_to(REPO)}: {name}={value}")
+    assert repeats == []
+
+
+@pytest.mark.parametrize("cfg", sorted(GENERATED))
+def test_generated_cores_hold_no_literal_defaults(cfg):
+    """A Config member named as a .cfg parameter takes the generated default, not a literal."""
+    names = {param["name"] for param in read_cfg(REPO / cfg)}
+    for header in GENERATED[cfg]:
+        text = (REPO / header).read_text()
+        assert f"{Path(cfg).stem}Defaults" in text, header
+        members = [
+            m for body in CONFIG_STRUCT.findall(text) for m in LITERAL_INITIALISER.findall(body)
+        ]
+        assert [m for m in members if m in names] == [], header
