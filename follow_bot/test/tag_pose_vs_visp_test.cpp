@@ -90,6 +90,7 @@ TEST_P(TagPoseVsVisp, TranslationNoWorseThanVisp) {
       {1.5, 0.2, 40}, {1.5, 0.0, -15}, {2.0, 0.0, 0},   {2.0, 0.4, 30}, {2.5, -0.3, -40},
       {3.0, 0.0, 0},  {3.0, 0.5, 45},  {3.0, -0.6, -20}};
   TagDetectorConfig config;
+  TagDetector ours(config);
   vpDetectorAprilTag visp(vpDetectorAprilTag::TAG_36h11, GetParam());
   visp.setAprilTagNbThreads(1);
   visp.setAprilTagQuadDecimate(static_cast<float>(config.quad_decimate));
@@ -105,7 +106,7 @@ TEST_P(TagPoseVsVisp, TranslationNoWorseThanVisp) {
     Errors ours_view, visp_view;
     for (int seed = 0; seed < kSeeds; ++seed) {
       const cv::Mat frame = cameraFrame(camera, truth, seed);
-      TagDetector ours(config);  // a fresh tracker: no previous pose to lean on
+      ours.reset();  // no previous pose to lean on
       const std::optional<MarkerObservation> seen = ours.detect(frame, camera);
       const std::optional<Errors> theirs = vispErrors(visp, frame, camera, truth);
       ASSERT_TRUE(seen && theirs) << v.along << " m, seed " << seed;
