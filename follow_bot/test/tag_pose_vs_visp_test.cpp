@@ -1,9 +1,13 @@
 // TagDetector's pose against ViSP 3.5's vpDetectorAprilTag (its best estimator for one tag,
 // HOMOGRAPHY_ORTHOGONAL_ITERATION, or its default HOMOGRAPHY_VIRTUAL_VS) on the same frames: tags
 // rendered at known poses as a camera would see them (anti-aliased, a lens blur, sensor noise,
-// 8-bit quantisation, print contrast rather than pure black and white).
+// 8-bit quantisation, print contrast rather than pure black and white). Both read libapriltag's
+// corners; ViSP 3.5 takes them in apriltag's half-pixel-centred coordinates against integer-centred
+// intrinsics (a 0.5 px shift in x and y), TagDetector shifts them first, hence its lead.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
