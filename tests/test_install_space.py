@@ -133,6 +133,7 @@ def test_installed_launch_files(tmp_path):
         "worlds",
         "follow_bot_msgs",
         "follow_bot_common",
+        "compressed_transport",
         "harness",
         "image_converter",
         "follow_bot",

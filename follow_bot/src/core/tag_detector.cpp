@@ -43,6 +43,10 @@ const FamilyFactory* findFamily(const std::string& name) {
   return nullptr;
 }
 
+// Where libapriltag puts a pixel's centre, in its own coordinates (quad_decimate's and
+// refine_edges' `+ 0.5`).
+constexpr double kApriltagPixelCentre = 0.5;
+
 // Angle of the rotation taking a to b, radians.
 double rotationAngle(const cv::Matx33d& a, const cv::Matx33d& b) {
   const cv::Matx33d delta = a.t() * b;
@@ -194,16 +198,19 @@ std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
     out = MarkerObservation{};
     out->id = best->id;
     out->quality = best->decision_margin;
-    for (int i = 0; i < 4; ++i) {  // apriltag wraps BL, BR, TR, TL; we report TL, TR, BR, BL
-      out->corners[i] = cv::Point2d(best->p[3 - i][0], best->p[3 - i][1]);
+    // apriltag's pixel centres are at half-integer coordinates (pixel (0, 0) spans [0, 1]), ours
+    // and the intrinsics' at integers (OpenCV, ROS CameraInfo, ViSP).
+    std::vector<cv::Point2d> image;
+    for (int i = 0; i < 4; ++i) {
+      image.emplace_back(best->p[i][0] - kApriltagPixelCentre,
+                         best->p[i][1] - kApriltagPixelCentre);
     }
+    for (int i = 0; i < 4; ++i) out->corners[i] = image[3 - i];  // apriltag wraps BL, BR, TR, TL
 
     // Both minima of the planar pose problem (IPPE for a square, object points in apriltag's
     // corner order), then the chosen one refined on the four corners (refinePose).
     const double h = config_.size_m / 2.0;
     const std::vector<cv::Point3d> object = {{-h, h, 0}, {h, h, 0}, {h, -h, 0}, {-h, -h, 0}};
-    std::vector<cv::Point2d> image;
-    for (int i = 0; i < 4; ++i) image.emplace_back(best->p[i][0], best->p[i][1]);
     const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
     std::vector<cv::Mat> rvecs, tvecs;
     std::vector<double> residuals;
