@@ -55,7 +55,11 @@ def camera_geometry(info):
     fx, _, cx, _, fy, cy = info.K[:6]
     pitch_deg = rospy.get_param("~camera_pitch_deg", math.degrees(default.pitch_rad))
     return core.CameraGeometry(
-        fx=fx, fy=fy, cx=cx, cy=cy, height_m=rospy.get_param("~camera_height", default.height_m),
+        fx=fx,
+        fy=fy,
+        cx=cx,
+        cy=cy,
+        height_m=rospy.get_param("~camera_height", default.height_m),
         pitch_rad=math.radians(pitch_deg),
         x_offset_m=rospy.get_param("~camera_x_offset", default.x_offset_m),
     )

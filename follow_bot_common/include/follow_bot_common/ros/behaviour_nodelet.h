@@ -140,8 +140,7 @@ class BehaviourNodelet : public CheckedNodelet {
     // the transport's topic (<base>/compressed): image_transport appends to the name as given.
     const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
     image_sub_ = image_transport::ImageTransport(nh).subscribe(
-        nh.resolveName(topics::kImage), 1, &BehaviourNodelet::onImage, this,
-        hints);
+        nh.resolveName(topics::kImage), 1, &BehaviourNodelet::onImage, this, hints);
     image_topic_ = image_sub_.getTopic();
   }
 
