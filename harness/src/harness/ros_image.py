@@ -1,6 +1,5 @@
 """numpy <-> sensor_msgs/Image without cv_bridge (its Python module is built for Debian's numpy)."""
 
-import cv2
 import numpy as np
 from sensor_msgs.msg import CompressedImage, Image
 
@@ -19,6 +18,8 @@ def bgr_to_msg(image: np.ndarray, stamp, frame_id: str) -> Image:
 
 def bgr_to_jpeg_msg(image: np.ndarray, stamp, frame_id: str, quality: int) -> CompressedImage:
     """Codes an HxWx3 uint8 BGR array as the `compressed` image_transport publishes it."""
+    import cv2  # here: the lab nodes import this module under Debian's python3, which has no cv2
+
     ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, quality])
     if not ok:
         raise ValueError(f"JPEG coding of a {image.shape} image failed")
