@@ -1,7 +1,7 @@
 """colcon install space: with only `install/setup.bash` sourced (no devel space, no source tree on
 ROS_PACKAGE_PATH, no $FOLLOW_BOT_VENV), the installed simulator finds the project venv (cv2, set by
 harness's env hook) and the worlds (the installed `worlds` package, through rospkg), and the
-installed launch files find the sign image through `$(find worlds)`.
+installed launch files find the sign image through `$(find follow_bot)`.
 
 test_installed_sim_drives (make test, ~40 s): colcon installs `worlds`, `follow_bot_msgs` (the
 status the sim waits for) and `harness` into a tmp prefix; the installed sim plays 1 s of lockstep

@@ -11,7 +11,7 @@ import pytest
 from harness.render import Renderer
 from harness.sign_texture import draw_sign
 
-SIGN_PNG = Path(__file__).resolve().parents[2] / "worlds" / "textures" / "parking_sign.png"
+SIGN_PNG = Path(__file__).resolve().parents[2] / "follow_bot" / "assets" / "parking_sign.png"
 
 
 def test_committed_sign_is_what_the_script_draws():

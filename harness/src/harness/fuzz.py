@@ -31,9 +31,9 @@ import numpy as np
 
 from harness.apriltag_image import tag_image
 from harness.run_scenario import free_port, stop, wait_for_port
-from harness.world import WORLDS_DIR
+from harness.world import package_dir
 
-SIGN_IMAGE = WORLDS_DIR / "textures" / "parking_sign.png"
+SIGN_IMAGE = package_dir("follow_bot") / "assets" / "parking_sign.png"
 SIGN_WIDTH_M = 0.40
 TAG_SIZE_M = 0.30
 # The shared limits' defaults (follow_bot/README.md: ~limit_linear, ~limit_angular).

@@ -1,4 +1,4 @@
-"""The parking sign picture (worlds/textures/parking_sign.png), drawn deterministically.
+"""The parking sign picture (follow_bot/assets/parking_sign.png), drawn deterministically.
 
 A blue sign with a big white "P", the word PARKING and a white border, plus the distinctive,
 non-repeating detail a SIFT matcher needs: a border of dashes of varying length, corner glyphs
@@ -6,7 +6,7 @@ that differ from each other, and a panel of fixed shapes (a car, an arrow, a clo
 triangles, digits). Everything is drawn with OpenCV primitives and Hershey fonts from fixed
 coordinates, so the same image comes out on every machine.
 
-    python3 -m harness.sign_texture worlds/textures/parking_sign.png
+    python3 -m harness.sign_texture follow_bot/assets/parking_sign.png
 """
 
 from __future__ import annotations

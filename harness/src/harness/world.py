@@ -36,16 +36,18 @@ from harness.validation import (
 )
 
 
-def _worlds_dir() -> Path:
-    """The shipped worlds: the `worlds` package, as `$(find worlds)` finds it in a devel or an
-    install space; outside any ROS environment, the source tree's worlds/."""
+def package_dir(name: str) -> Path:
+    """Package `name` as `$(find name)` finds it in a devel or an install space; outside any ROS
+    environment, its folder in the source tree."""
     try:
-        return Path(rospkg.RosPack().get_path("worlds"))
+        return Path(rospkg.RosPack().get_path(name))
     except rospkg.ResourceNotFound:
-        return Path(__file__).resolve().parents[3] / "worlds"
+        return Path(__file__).resolve().parents[3] / name
 
 
-WORLDS_DIR = _worlds_dir()
+# The shipped worlds: the `worlds` package.
+WORLDS_DIR = package_dir("worlds")
+PACKAGE_URL = "package://"
 # Sample spacing of line centrelines; the texture and the scoring use the same samples.
 CENTRELINE_SPACING = 0.01
 # Largest ground texture side, to keep memory and warp cost bounded.
@@ -222,7 +224,12 @@ class World:
 
 def _image_file(base_dir: Path) -> Parser:
     def parse(value: Any, where: str) -> tuple[Path, np.ndarray]:
-        path = base_dir / string(value, where)
+        name = string(value, where)
+        if name.startswith(PACKAGE_URL):  # package://<package>/<path>: another package's file
+            package, _, relative = name[len(PACKAGE_URL) :].partition("/")
+            path = package_dir(package) / relative
+        else:
+            path = base_dir / name
         image = cv2.imread(str(path), cv2.IMREAD_COLOR) if path.is_file() else None
         if image is None:
             raise WorldError(f"{where}: cannot read image file {str(path)!r}")
