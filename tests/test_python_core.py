@@ -101,6 +101,23 @@ def test_line_detector_reads_crops_in_place_and_matches_a_copy():
     assert (band.error_px, band.confidence, band.row_begin, band.row_end) == (185.0, 1.0, 360, 380)
 
 
+def test_line_detector_keeps_the_blob_of_the_previous_sighting():
+    # line_detector_test.cpp: KeepsTheBlobNearestThePreviousSighting.
+    grey, yellow = (110, 115, 120), (0, 220, 230)
+    line_only = np.full((480, 640, 3), grey, np.uint8)
+    line_only[:, 300:311] = yellow
+    with_tape = line_only.copy()
+    with_tape[365:, 500:540] = yellow
+    detector = core.LineDetector()
+    previous = detector.detect(line_only)
+    assert detector.detect(with_tape).band.pixel_count == 11 * 20 + 40 * 15
+    band = detector.detect(with_tape, previous).band
+    assert (band.found, band.pixel_count, band.centroid_x, band.centroid_y) == (
+        True, 220, 305.0, 369.5,
+    )  # fmt: skip
+    assert band_fields(detector.detect(line_only, previous).band) == band_fields(previous.band)
+
+
 def test_line_detector_debug_mask_and_drawing():
     frame = np.full((480, 640, 3), (110, 115, 120), np.uint8)
     frame[:, 100:110] = (0, 220, 230)

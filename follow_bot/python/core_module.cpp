@@ -143,12 +143,15 @@ void bindLineDetector(py::module_& m) {
       .def(py::init<const LineDetectorConfig&>(), "config"_a = LineDetectorConfig())
       .def(
           "detect",
-          [](const LineDetector& detector, const py::handle& bgr) {
+          [](const LineDetector& detector, const py::handle& bgr,
+             const std::optional<LineMeasurement>& previous) {
             const cv::Mat frame = matView(bgr, 3);
             py::gil_scoped_release unlocked;
-            return detector.detect(frame);
+            return previous ? detector.detect(frame, *previous) : detector.detect(frame);
           },
-          "bgr"_a, "The line in an HxWx3 uint8 BGR frame.")
+          "bgr"_a, "previous"_a = py::none(),
+          "The line in an HxWx3 uint8 BGR frame; with `previous` (the last measurement), only "
+          "the band's blob nearest its sighting.")
       .def(
           "debug_mask",
           [](const LineDetector& detector, const py::handle& bgr) {

@@ -96,6 +96,66 @@ TEST(LineDetector, FindsAStripeAtItsColumn) {
   EXPECT_EQ(m.band.row_end, 380);
 }
 
+// The line at columns 300..310 and an off-line tape patch at 500..539, both through the band.
+cv::Mat lineAndTapeFrame() {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 300, 11, 0, 480);
+  paintStripe(frame, 500, 40, 365, 480);  // tape: 40 columns, band rows 365..379
+  return frame;
+}
+
+TEST(LineDetector, WithoutAPreviousSightingTheTapePullsTheCentroid) {
+  const BandMeasurement band = LineDetector().detect(lineAndTapeFrame()).band;
+  EXPECT_EQ(band.pixel_count, 11 * 20 + 40 * 15);
+  // (305 * 220 + 519.5 * 600) / 820
+  EXPECT_DOUBLE_EQ(band.centroid_x, (305.0 * 220 + 519.5 * 600) / 820);
+}
+
+TEST(LineDetector, KeepsTheBlobNearestThePreviousSighting) {
+  const LineDetector detector;
+  cv::Mat line_only = greyFrame();
+  paintStripe(line_only, 300, 11, 0, 480);
+  const LineMeasurement previous = detector.detect(line_only);
+  ASSERT_TRUE(previous.band.found);
+
+  const LineMeasurement m = detector.detect(lineAndTapeFrame(), previous);
+  ASSERT_TRUE(m.ok()) << m.error;
+  EXPECT_TRUE(m.band.found);
+  EXPECT_EQ(m.band.pixel_count, 11 * 20);
+  EXPECT_DOUBLE_EQ(m.band.centroid_x, 305.0);
+  EXPECT_DOUBLE_EQ(m.band.centroid_y, 369.5);
+  EXPECT_DOUBLE_EQ(m.band.error_px, -15.0);
+  EXPECT_DOUBLE_EQ(m.band.confidence, 1.0);
+
+  // A previous sighting on the tape's side keeps the tape instead: the hint decides.
+  cv::Mat tape_side = greyFrame();
+  paintStripe(tape_side, 520, 11, 0, 480);
+  const BandMeasurement on_tape =
+      detector.detect(lineAndTapeFrame(), detector.detect(tape_side)).band;
+  EXPECT_EQ(on_tape.pixel_count, 40 * 15);
+  EXPECT_DOUBLE_EQ(on_tape.centroid_x, 519.5);
+  EXPECT_DOUBLE_EQ(on_tape.centroid_y, 372.0);
+  EXPECT_DOUBLE_EQ(on_tape.confidence, 15.0 / 20.0);
+}
+
+TEST(LineDetector, APreviousSightingChangesNothingForASingleBlob) {
+  const LineDetector detector;
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 300, 11, 0, 480);
+  cv::Mat moved = greyFrame();
+  paintStripe(moved, 200, 13, 0, 480);
+  const BandMeasurement alone = detector.detect(moved).band;
+  const BandMeasurement hinted = detector.detect(moved, detector.detect(frame)).band;
+  EXPECT_EQ(hinted.pixel_count, alone.pixel_count);
+  EXPECT_EQ(hinted.centroid_x, alone.centroid_x);
+  EXPECT_EQ(hinted.centroid_y, alone.centroid_y);
+  EXPECT_EQ(hinted.confidence, alone.confidence);
+  // A hint from a frame of another size is ignored: all line pixels, as without one.
+  const BandMeasurement other_size =
+      detector.detect(lineAndTapeFrame(), detector.detect(greyFrame(240, 320))).band;
+  EXPECT_EQ(other_size.pixel_count, 11 * 20 + 40 * 15);
+}
+
 TEST(LineDetector, FindsAnAntiAliasedLineWithinHalfAPixel) {
   for (double x : {100.25, 319.5, 320.0, 421.75}) {
     cv::Mat frame = greyFrame();

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <optional>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -153,6 +155,13 @@ class LineDetector {
   // over the rows it has.
   LineMeasurement detect(const cv::Mat& bgr) const;
 
+  // As detect(bgr), but keeps each band on the line `previous` (the last measurement) saw there:
+  // when that band was found and its mask now holds several 8-connected blobs, only the blob
+  // nearest the previous centroid column is measured, so a line-coloured patch beside the line
+  // (tape, a reflection) does not pull the centroid. With one blob, or no previous sighting, the
+  // result is detect(bgr)'s, bit for bit.
+  LineMeasurement detect(const cv::Mat& bgr, const LineMeasurement& previous) const;
+
   // The lecture's mask: CV_8UC1 of the frame's size, 255 on line pixels inside the band(s),
   // 0 elsewhere. Empty for frames detect() rejects.
   cv::Mat debugMask(const cv::Mat& bgr) const;
@@ -166,7 +175,25 @@ class LineDetector {
   const LineDetectorConfig& config() const { return config_; }
 
  private:
-  BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band) const;
+  // The moments of a band's line pixels, divided by 255, and the rows that hold any.
+  struct BandSums {
+    std::int64_t count = 0, sum_x = 0, sum_y = 0;
+    int occupied_rows = 0;
+    void addRow(int y, int row_count, std::int64_t row_sum_x) {
+      count += row_count;
+      sum_x += row_sum_x;
+      sum_y += static_cast<std::int64_t>(row_count) * y;
+      occupied_rows += row_count > 0 ? 1 : 0;
+    }
+  };
+
+  BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band,
+                              std::optional<double> expected_x) const;
+  // The sums of the blob of `mask` (the band's rows from row_begin) nearest expected_x, or
+  // nothing when the mask holds a single blob.
+  static std::optional<BandSums> nearestBlobSums(const cv::Mat& mask, int row_begin,
+                                                 double expected_x);
+  void fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const;
 
   LineDetectorConfig config_;
   HsvBox box_;

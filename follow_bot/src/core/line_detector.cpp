@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -276,53 +277,111 @@ LineDetector::LineDetector(const LineDetectorConfig& config)
     : config_(validated(config)), box_(config.lower, config.upper) {}
 
 LineMeasurement LineDetector::detect(const cv::Mat& bgr) const {
+  return detect(bgr, LineMeasurement());
+}
+
+LineMeasurement LineDetector::detect(const cv::Mat& bgr, const LineMeasurement& previous) const {
   LineMeasurement measurement;
   measurement.error = checkFrame(bgr);
   if (!measurement.ok()) return measurement;
   measurement.image_width = bgr.cols;
   measurement.image_height = bgr.rows;
-  measurement.band = measureBand(bgr, config_.band);
-  if (config_.look_ahead_enabled) measurement.look_ahead = measureBand(bgr, config_.look_ahead);
+  // A previous sighting is only a hint for a frame of the same size.
+  const bool same_size = previous.image_width == bgr.cols && previous.image_height == bgr.rows;
+  auto expected_x = [&](const BandMeasurement& band) {
+    return same_size && band.found ? std::optional<double>(band.centroid_x) : std::nullopt;
+  };
+  measurement.band = measureBand(bgr, config_.band, expected_x(previous.band));
+  if (config_.look_ahead_enabled) {
+    measurement.look_ahead = measureBand(bgr, config_.look_ahead, expected_x(previous.look_ahead));
+  }
   return measurement;
 }
 
-BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& band) const {
+BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& band,
+                                          std::optional<double> expected_x) const {
   BandMeasurement result;
   bandRows(band, bgr.rows, &result.row_begin, &result.row_end);
+  const int band_rows = result.row_end - result.row_begin;
+
+  // The band's mask, kept only when a blob may have to be picked out of it.
+  cv::Mat mask;
+  if (expected_x && band_rows > 0) mask = cv::Mat::zeros(band_rows, bgr.cols, CV_8UC1);
 
   // The lecture's moments, divided by 255: m00 = count, m10 = sum_x, m01 = sum_y.
-  std::int64_t count = 0, sum_x = 0, sum_y = 0;
-  int occupied_rows = 0;
+  BandSums sums;
   for (int y = result.row_begin; y < result.row_end; ++y) {
     int row_count = 0;
     std::int64_t row_sum_x = 0;
+    uchar* mask_row = mask.empty() ? nullptr : mask.ptr<uchar>(y - result.row_begin);
     visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols, [&](int x, bool is_line) {
       row_count += is_line ? 1 : 0;
       row_sum_x += is_line ? x : 0;
+      if (mask_row != nullptr) mask_row[x] = is_line ? 255 : 0;
     });
-    count += row_count;
-    sum_x += row_sum_x;
-    sum_y += static_cast<std::int64_t>(row_count) * y;
-    occupied_rows += row_count > 0 ? 1 : 0;
+    sums.addRow(y, row_count, row_sum_x);
   }
-  result.pixel_count = static_cast<int>(count);
-  if (count == 0) return result;
+  if (!mask.empty() && sums.count > 0) {
+    sums = nearestBlobSums(mask, result.row_begin, *expected_x).value_or(sums);
+  }
+  fillBand(sums, bgr.cols, &result);
+  return result;
+}
 
-  result.found = count >= config_.min_pixels;
-  result.centroid_x = static_cast<double>(sum_x) / count;
-  result.centroid_y = static_cast<double>(sum_y) / count;
-  const double half_width = bgr.cols / 2.0;
-  result.error_px = result.centroid_x - half_width;
-  result.error_normalised = result.error_px / half_width;
+std::optional<LineDetector::BandSums> LineDetector::nearestBlobSums(const cv::Mat& mask,
+                                                                    int row_begin,
+                                                                    double expected_x) {
+  cv::Mat labels, stats, centroids;
+  const int label_count =
+      cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+  if (label_count <= 2) return std::nullopt;  // one blob: all line pixels are it
+  // The blob whose columns come nearest the expected column; among those that contain it, the
+  // largest, so a speck of noise beside the line does not win.
+  int best = 0;
+  double best_distance = 0.0;
+  for (int label = 1; label < label_count; ++label) {
+    const int left = stats.at<int>(label, cv::CC_STAT_LEFT);
+    const int right = left + stats.at<int>(label, cv::CC_STAT_WIDTH) - 1;
+    const double distance = std::max({0.0, left - expected_x, expected_x - right});
+    if (best == 0 || distance < best_distance ||
+        (distance == best_distance &&
+         stats.at<int>(label, cv::CC_STAT_AREA) > stats.at<int>(best, cv::CC_STAT_AREA))) {
+      best = label;
+      best_distance = distance;
+    }
+  }
+  BandSums sums;
+  for (int y = 0; y < labels.rows; ++y) {
+    const int* label_row = labels.ptr<int>(y);
+    int row_count = 0;
+    std::int64_t row_sum_x = 0;
+    for (int x = 0; x < labels.cols; ++x) {
+      row_count += label_row[x] == best ? 1 : 0;
+      row_sum_x += label_row[x] == best ? x : 0;
+    }
+    sums.addRow(row_begin + y, row_count, row_sum_x);
+  }
+  return sums;
+}
+
+void LineDetector::fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const {
+  result->pixel_count = static_cast<int>(sums.count);
+  if (sums.count == 0) return;
+
+  result->found = sums.count >= config_.min_pixels;
+  result->centroid_x = static_cast<double>(sums.sum_x) / sums.count;
+  result->centroid_y = static_cast<double>(sums.sum_y) / sums.count;
+  const double half_width = image_width / 2.0;
+  result->error_px = result->centroid_x - half_width;
+  result->error_normalised = result->error_px / half_width;
 
   const double row_coverage =
-      static_cast<double>(occupied_rows) / (result.row_end - result.row_begin);
-  const double width_fraction = static_cast<double>(count) / occupied_rows / bgr.cols;
+      static_cast<double>(sums.occupied_rows) / (result->row_end - result->row_begin);
+  const double width_fraction = static_cast<double>(sums.count) / sums.occupied_rows / image_width;
   const double width_sanity = width_fraction <= config_.max_width_fraction
                                   ? 1.0
                                   : (1.0 - width_fraction) / (1.0 - config_.max_width_fraction);
-  result.confidence = row_coverage * width_sanity;
-  return result;
+  result->confidence = row_coverage * width_sanity;
 }
 
 cv::Mat LineDetector::debugMask(const cv::Mat& bgr) const {

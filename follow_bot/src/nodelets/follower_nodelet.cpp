@@ -109,7 +109,8 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   LineState state() const { return law_->state(); }
 
   Decision step(const Frame& frame) override {
-    seen_ = detector_->detect(frame.image);
+    // The last sighting keeps the band on the line it followed (see LineDetector::detect).
+    seen_ = detector_->detect(frame.image, seen_);
     const Twist2D desired = steer(seen_, frame.time);
     if (!seen_.band.found)
       NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(state()));
