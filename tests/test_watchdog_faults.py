@@ -120,6 +120,10 @@ def client(key: str) -> None:
     deadline = time.monotonic() + 30
     while image_pub.get_num_connections() == 0 and time.monotonic() < deadline:
         time.sleep(0.05)
+    if spec.capturing:  # the latched pose reaches the node once it has connected
+        while odom_pub.get_num_connections() == 0 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.2)
 
     capture_replies: list[str] = []  # the panorama's ~capture answers, one per ended capture
 
