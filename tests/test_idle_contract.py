@@ -181,8 +181,8 @@ NODES = {
     # The standoff is the probe tag's distance (fuzz.expected_range("tag"), camera at the base
     # origin, level), tolerances wide enough that its quantised pose counts as parked.
     "parker_parked": [
-        "follow_bot", "parker", "_standoff:=1.7321", "_camera_x_offset:=0.0", "_camera_pitch_deg:=0",
-        "_position_tolerance:=0.05", "_lateral_tolerance:=0.05", "_heading_tolerance_deg:=5",
+        "follow_bot", "parker", "_standoff:=1.7321", "_camera_x_offset:=0.0",
+        "_camera_pitch_deg:=0", "_position_tolerance:=0.05", "_lateral_tolerance:=0.05", "_heading_tolerance_deg:=5",
     ],
 }  # fmt: skip
 
