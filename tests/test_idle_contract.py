@@ -182,7 +182,8 @@ NODES = {
     # origin, level), tolerances wide enough that its quantised pose counts as parked.
     "parker_parked": [
         "follow_bot", "parker", "_standoff:=1.7321", "_camera_x_offset:=0.0",
-        "_camera_pitch_deg:=0", "_position_tolerance:=0.05", "_lateral_tolerance:=0.05", "_heading_tolerance_deg:=5",
+        "_camera_pitch_deg:=0", "_position_tolerance:=0.05", "_lateral_tolerance:=0.05",
+        "_heading_tolerance_deg:=5",
     ],
 }  # fmt: skip
 
