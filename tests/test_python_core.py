@@ -21,6 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from test_stitch_cli import textured_scene  # the same ORB-friendly scenes as the stitch CLI tests
 
 from follow_bot import core
 from harness.render import Renderer
@@ -475,18 +476,6 @@ def test_beacon_controller_approach_mode_range_from_the_cpp():
 
 
 # ---- image_converter.core: bit for bit against the C++ library ---------------------------------
-
-
-def textured_scene(width, height, seed):
-    """Shapes of random colour on smoothed noise (as tests/test_stitch_cli.py): corners for ORB."""
-    rng = np.random.default_rng(seed)
-    scene = cv2.GaussianBlur(rng.integers(0, 256, (height, width, 3), dtype=np.uint8), (0, 0), 2)
-    for _ in range(width * height // 1500):
-        colour = [int(c) for c in rng.integers(0, 256, 3)]
-        x, y = int(rng.integers(0, width)), int(rng.integers(0, height))
-        w, h = (int(v) for v in rng.integers(4, 30, 2))
-        cv2.rectangle(scene, (x, y), (x + w, y + h), colour, cv2.FILLED)
-    return cv2.GaussianBlur(scene, (0, 0), 1.0)
 
 
 def run_ic_reference(*args):
