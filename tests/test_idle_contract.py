@@ -72,11 +72,13 @@ class Lockstep:
         self.t += 1.0 / RATE
         msg.header.stamp = rospy.Time.from_sec(self.t)
         with self.cond:
-            answered = len(self.statuses)
+            answered, heard = len(self.statuses), len(self.twists)
             self.image_pub.publish(msg)
             assert self.cond.wait_for(lambda: len(self.statuses) > answered, 10.0), "no status"
-            sent = sum(s.command_sent for s in self.statuses)
-            self.cond.wait_for(lambda: len(self.twists) >= sent, 1.0)
+            # The frame's own cmd_vel, when its status says one went out (counted per frame: a
+            # running total would be off by any Twist sent outside a frame, e.g. ~enable's zero).
+            if self.statuses[-1].command_sent:
+                assert self.cond.wait_for(lambda: len(self.twists) > heard, 10.0), "no cmd_vel"
         if wall_rate:
             time.sleep(1.0 / RATE)
 
@@ -151,7 +153,11 @@ def client(case: str) -> dict:
         before = len(steps.twists)
         reply = enable(False)
         out["disable_reply"] = [reply.success, reply.message]
-        time.sleep(0.2)  # the zero is published by the call itself, before the next frame
+        # The zero is published by the call itself, before the next frame; any second Twist
+        # would come within the wait after it.
+        with steps.cond:
+            steps.cond.wait_for(lambda: len(steps.twists) > before, 10.0)
+        time.sleep(0.2)
         out["twists_at_disable"] = steps.twists[before:]
         out["disabled_from"] = len(steps.statuses)
         for _ in range(30):
