@@ -67,7 +67,7 @@ std::string mountingFromTransform(const cv::Vec3d& origin, const cv::Matx33d& ro
 std::string describeMounting(const CameraGeometry& camera) {
   char text[128];
   std::snprintf(text, sizeof text, "height %.3f m, pitch %.1f deg down, x offset %.3f m",
-                camera.height_m, degrees(camera.pitch_rad), camera.x_offset_m);
+                camera.height_m, degrees(camera.pitch_rad) + 0.0, camera.x_offset_m);  // no "-0.0"
   return text;
 }
 
