@@ -113,12 +113,15 @@ std::optional<CameraGeometry> CameraMountingSource::fromTf(const std::string& fr
 
 void CameraMountingSource::use(const CameraGeometry& mounting, const std::string& source,
                                CameraGeometry& camera, bool& changed) {
-  changed = !known_ || !sameMounting(mounting, camera);
+  // `camera` is what the cores were built with: the same mounting needs no rebuild (for some
+  // cores, e.g. the sign parker's, an expensive one), but is logged once as the one in use.
+  changed = !sameMounting(mounting, camera);
+  const bool first = !known_;
   camera.height_m = mounting.height_m;
   camera.pitch_rad = mounting.pitch_rad;
   camera.x_offset_m = mounting.x_offset_m;
   known_ = true;
-  if (changed) {
+  if (changed || first) {
     ROS_INFO("%s: camera mounting from %s: %s", name_.c_str(), source.c_str(),
              describeMounting(camera).c_str());
   }

@@ -91,8 +91,8 @@ class BehaviourNodelet : public CheckedNodelet {
   virtual void intrinsicsArrived(bool changed) {
     if (changed) configure(applied_config_);
   }
-  // The camera's mounting in camera() was first found or changed. By default the cores are
-  // rebuilt from the settings in force.
+  // The camera's mounting in camera() differs from the one the cores were built with (the
+  // ~params'). By default the cores are rebuilt from the settings in force.
   virtual void mountingChanged() { configure(applied_config_); }
   // One accepted frame: what the behaviour wants the robot to do.
   virtual Decision step(const Frame& frame) = 0;

@@ -42,7 +42,8 @@ class CameraMountingSource {
 
   // The mounting for a frame from the camera frame `frame_id`: writes it into `camera` (the
   // intrinsics untouched) and returns true once known; false while waiting for tf. `changed`:
-  // the mounting in `camera` differs from before (it is then logged).
+  // the mounting in `camera` differs from before. The mounting is logged when first known and
+  // whenever it changes.
   bool update(const std::string& frame_id, CameraGeometry& camera, bool& changed);
 
  private:
