@@ -151,7 +151,7 @@ class NodeUnderTest:
         )
         assert wait_for_port(self.port, 20.0)
         self.node = subprocess.Popen(
-            ["rosrun", "follow_bot", "beacon_chaser"],
+            ["rosrun", "follow_bot", "beacon_chaser", "_camera_mounting:=params"],  # no tf here
             stdout=subprocess.DEVNULL,
             stderr=subprocess.STDOUT,
         )

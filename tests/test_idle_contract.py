@@ -180,16 +180,17 @@ def client(case: str) -> dict:
     return out
 
 
+# No robot description here: every node takes its camera's mounting from its ~params.
 NODES = {
-    "panorama_idle": ["follow_bot", "panorama"],
-    "follower_gives_up": ["follow_bot", "follower", "_mode:=pd"],
-    "follower_enable": ["follow_bot", "follower", "_mode:=pd"],
+    "panorama_idle": ["follow_bot", "panorama", "_camera_mounting:=params"],
+    "follower_gives_up": ["follow_bot", "follower", "_mode:=pd", "_camera_mounting:=params"],
+    "follower_enable": ["follow_bot", "follower", "_mode:=pd", "_camera_mounting:=params"],
     # The standoff is the probe tag's distance (fuzz.expected_range("tag"), camera at the base
     # origin, level), tolerances wide enough that its quantised pose counts as parked.
     "parker_parked": [
         "follow_bot", "parker", "_standoff:=1.7321", "_camera_x_offset:=0.0",
         "_camera_pitch_deg:=0", "_position_tolerance:=0.05", "_lateral_tolerance:=0.05",
-        "_heading_tolerance_deg:=5",
+        "_heading_tolerance_deg:=5", "_camera_mounting:=params",
     ],
 }  # fmt: skip
 

@@ -64,6 +64,22 @@ def master_env():
             "_camera_height:=inf",
             "~camera_height must be a finite number > 0, got the number inf",
         ),
+        (
+            "follow_bot follower",
+            "_camera_mounting:=urdf",
+            "~camera_mounting must be 'tf' or 'params', got 'urdf'",
+        ),
+        (
+            "follow_bot parker",
+            "_camera_mounting:=1",
+            "~camera_mounting must be a string, got the integer 1",
+        ),
+        ("follow_bot beacon_chaser", "_base_frame:=", "~base_frame must not be empty"),
+        (
+            "follow_bot panorama",
+            "_mounting_timeout:=0",
+            "~mounting_timeout must be > 0, got 0",
+        ),
         ("follow_bot follower", "_mode:=fast", "~mode"),
         ("follow_bot follower", "_limit_linear:=0", "~limit_linear must be > 0"),
         ("follow_bot follower", "_watchdog_timeout:=-1", "~watchdog_timeout must be > 0"),

@@ -102,7 +102,9 @@ def client() -> None:
 @pytest.fixture(scope="module")
 def result() -> dict:
     out = run_with_client(
-        ["follow_bot", "panorama"], [sys.executable, __file__, "--client"], timeout=120
+        ["follow_bot", "panorama", "_camera_mounting:=params"],  # no robot description here
+        [sys.executable, __file__, "--client"],
+        timeout=120,
     )
     print(out)
     return out

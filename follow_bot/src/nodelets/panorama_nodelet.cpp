@@ -123,8 +123,10 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
     spinner_->start();
   }
 
-  // The intrinsics are read from camera() when stitching: a capture keeps its schedule.
+  // The intrinsics and the mounting are read from camera() when stitching: a capture keeps its
+  // schedule.
   void intrinsicsArrived(bool) override {}
+  void mountingChanged() override {}
 
   bool onCapture(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
     std::unique_lock<boost::recursive_mutex> lock(mutex());

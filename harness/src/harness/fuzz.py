@@ -56,26 +56,39 @@ class NodeSpec:
     capturing: bool = False  # panorama: keep a capture running through the storm
 
 
+# Nodes run without a robot description: each behaviour takes its camera's mounting from its
+# ~params rather than waiting for tf (follow_bot_common/README.md).
+PARAMS_MOUNTING = {"camera_mounting": "params"}
+
 NODES: dict[str, NodeSpec] = {
     "image_converter": NodeSpec("image_converter", "image_converter", probe="overlay"),
-    "follower": NodeSpec("follow_bot", "follower", probe="line"),
-    "beacon_follow": NodeSpec("follow_bot", "beacon_chaser", probe="green"),
+    "follower": NodeSpec("follow_bot", "follower", PARAMS_MOUNTING, probe="line"),
+    "beacon_follow": NodeSpec("follow_bot", "beacon_chaser", PARAMS_MOUNTING, probe="green"),
     "beacon_approach": NodeSpec(
         "follow_bot",
         "beacon_chaser",
-        {"mode": "approach", "target_shape": "sphere", "target_size": 0.2},
+        {**PARAMS_MOUNTING, "mode": "approach", "target_shape": "sphere", "target_size": 0.2},
         probe="green",
     ),
-    "parker_tag": NodeSpec("follow_bot", "parker", probe="tag"),
+    "parker_tag": NodeSpec("follow_bot", "parker", PARAMS_MOUNTING, probe="tag"),
     "parker_sign": NodeSpec(
         "follow_bot",
         "parker",
-        {"target": "sign", "sign_image": str(SIGN_IMAGE), "sign_width": SIGN_WIDTH_M},
+        {
+            **PARAMS_MOUNTING,
+            "target": "sign",
+            "sign_image": str(SIGN_IMAGE),
+            "sign_width": SIGN_WIDTH_M,
+        },
         probe="sign",
     ),
-    "panorama_idle": NodeSpec("follow_bot", "panorama", probe="idle"),
+    "panorama_idle": NodeSpec("follow_bot", "panorama", PARAMS_MOUNTING, probe="idle"),
     "panorama_capturing": NodeSpec(
-        "follow_bot", "panorama", {"capture_timeout": 3600.0}, probe="turning", capturing=True
+        "follow_bot",
+        "panorama",
+        {**PARAMS_MOUNTING, "capture_timeout": 3600.0},
+        probe="turning",
+        capturing=True,
     ),
 }
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import fnmatch
 import json
-import math
 import os
 import signal
 import socket
@@ -34,7 +33,6 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
-from harness.camera import Camera
 from harness.contact_sheet import DEFAULT_FRAMES, write_contact_sheet
 from harness.plot import plot_run
 from harness.report import format_value, headline, write_summary
@@ -121,24 +119,14 @@ def stop(process: subprocess.Popen | None, timeout: float = 10.0) -> None:
         process.wait()
 
 
-def mounting_args(camera: Camera) -> dict[str, float]:
-    """The world camera's mounting as the behaviour launch files' arguments: the node under test
-    is told where its camera really is (every node has the same default mounting)."""
-    return {
-        "camera_height": camera.height_m,
-        "camera_pitch_deg": round(math.degrees(camera.pitch), 9),
-        "camera_x_offset": camera.x_offset_m,
-    }
-
-
-def behaviour_command(scenario: Scenario, camera: Camera) -> list[str]:
+def behaviour_command(scenario: Scenario) -> list[str]:
     if scenario.behaviour is None:
         v, w = scenario.constant_command
         return ["rosrun", "harness", "constant_twist", f"_v:={v}", f"_w:={w}"]
     b = scenario.behaviour
-    # The run's robot description comes from its world (description_command), not the launch's;
-    # the node under test is told the same mounting (a scenario's own args win).
-    args = {"robot_description": "false", **mounting_args(camera), **b.args}
+    # The run's robot description comes from its world (description_command), not the launch's:
+    # the node under test finds its camera's mounting in tf, as on a robot, never in ~params.
+    args = {"robot_description": "false", **b.args}
     launch = ["roslaunch", "--wait", b.package, b.launch_file]
     return launch + [f"{k}:={v}" for k, v in args.items()]
 
@@ -220,7 +208,7 @@ def run_one(
             description = start(description_command(scenario))
             if not wait_for_node(port, "/robot_state_publisher", 60.0, description):
                 raise RuntimeError(f"robot_state_publisher did not start (see {out}/ros.log)")
-            start(behaviour_command(scenario, world.camera))
+            start(behaviour_command(scenario))
             sim_command = [
                 "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip

@@ -17,6 +17,7 @@
 
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/ros/camera_input.h"
+#include "follow_bot_common/ros/camera_mounting_source.h"
 #include "follow_bot_common/ros/checked_nodelet.h"
 #include "follow_bot_common/ros/command_output.h"
 #include "follow_bot_common/ros/params.h"
@@ -49,8 +50,10 @@ struct BehaviourOptions {
 // The nodelet of a behaviour driven by camera frames (`Config`: its generated dynamic_reconfigure
 // config). It owns:
 //  * start-up: the ~params read and checked against the .cfg (readConfig), the camera's mounting
-//    (readCameraMounting: ~camera_height, ~camera_pitch_deg, ~camera_x_offset over
-//    CameraGeometry's defaults, the same for every behaviour), then setup() and
+//    ~params (readCameraMounting: ~camera_height, ~camera_pitch_deg, ~camera_x_offset over
+//    CameraGeometry's defaults, the same for every behaviour) and where the mounting comes from
+//    (CameraMountingSource: ~camera_mounting tf|params, ~base_frame, ~mounting_timeout), then
+//    setup() and
 //    configure(); with live_reconfigure, a dynamic_reconfigure server whose updates go through
 //    the same configure(): a rejected update changes nothing and the server reports back the
 //    settings in force. Any start-up error names the ~param and fails the load (CheckedNodelet).
@@ -60,7 +63,9 @@ struct BehaviourOptions {
 //    running on frames when camera_info is late or missing (then it says what it cannot do).
 //  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
 //  stamp checks;
-//    a bad frame is dropped with a throttled error), then per accepted frame step(), the one
+//    a bad frame is dropped with a throttled error), the camera's mounting for the frame (until
+//    it is known the behaviour holds still: an idle decision in state "waiting for camera
+//    mounting", no step()), then per accepted frame step(), the one
 //    CommandOutput::send (cmd_vel, ~status, watchdog, ~enable, final stop), report() and a lazy
 //    ~debug_image.
 //  * every callback runs guarded (an exception drops the message, never the node) and under
@@ -86,6 +91,9 @@ class BehaviourNodelet : public CheckedNodelet {
   virtual void intrinsicsArrived(bool changed) {
     if (changed) configure(applied_config_);
   }
+  // The camera's mounting in camera() differs from the one the cores were built with (the
+  // ~params'). By default the cores are rebuilt from the settings in force.
+  virtual void mountingChanged() { configure(applied_config_); }
   // One accepted frame: what the behaviour wants the robot to do.
   virtual Decision step(const Frame& frame) = 0;
   // After the frame's command went out (`sent`: what the robot was told, zero when quiet).
@@ -120,6 +128,7 @@ class BehaviourNodelet : public CheckedNodelet {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     applied_config_ = readConfig<Config>(pnh);  // throws on bad ~params
     camera_ = readCameraMounting(pnh);
+    mounting_ = std::make_unique<CameraMountingSource>(nh, pnh, camera_, getName());
     setup(nh, pnh, applied_config_);
     configure(applied_config_);
     output_ = std::make_unique<CommandOutput>(nh, pnh, options_.allow_reverse);
@@ -181,7 +190,9 @@ class BehaviourNodelet : public CheckedNodelet {
     // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
     output_->frameArrived();
     const Frame frame{msg->header, image->image, CommandOutput::frameTime(msg->header).toSec()};
-    const Decision decision = step(frame);
+    const Decision decision = updateMounting(msg->header.frame_id)
+                                  ? step(frame)
+                                  : Decision{{}, false, CameraMountingSource::kWaitingState};
     const Twist2D sent =
         output_->send(msg->header, decision.desired, decision.active, decision.state);
     report(frame, sent);
@@ -192,10 +203,28 @@ class BehaviourNodelet : public CheckedNodelet {
     }
   }
 
+  // The frame's mounting into camera_; false while it is unknown. A mounting the behaviour
+  // rejects (configure() throws) is not taken: the previous one stays and it is tried again.
+  bool updateMounting(const std::string& frame_id) {
+    const CameraGeometry previous = camera_;
+    bool changed = false;
+    if (!mounting_->update(frame_id, camera_, changed)) return false;
+    if (!changed) return true;
+    try {
+      mountingChanged();
+    } catch (const std::invalid_argument& error) {
+      NODELET_ERROR_THROTTLE(5.0, "keeping the previous camera mounting: %s", error.what());
+      camera_ = previous;
+      mountingChanged();
+    }
+    return true;
+  }
+
   const BehaviourOptions options_;
   boost::recursive_mutex mutex_;  // the type dynamic_reconfigure::Server shares
   Config applied_config_;         // the settings in force, reported back after a rejected update
   CameraGeometry camera_;
+  std::unique_ptr<CameraMountingSource> mounting_;
   bool has_intrinsics_ = false;
   std::string camera_info_topic_;
   std::string image_topic_;
