@@ -5,11 +5,14 @@
 // corners and quality are exact (17 significant digits) for tests/test_python_core.py.
 //
 //   marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N] [--tag-family F])
-//                [--fx F --fy F --cx C --cy C] [--independent] FRAME...
+//                [--fx F --fy F --cx C --cy C] [--distortion K1,K2,P1,P2,K3] [--independent]
+//                FRAME...
 //
-// Intrinsics default to the harness camera (640x480, 60 deg HFOV). Frames are read as grey
-// levels. One detector sees the frames in order, as a node would (its previous pose settles the
-// planar ambiguity); --independent makes a fresh detector for every frame instead.
+// Intrinsics default to the harness camera (640x480, 60 deg HFOV); --distortion: the frames are
+// raw through that plumb_bob lens (K from --fx..--cy, R = I, P = K), as the harness renders one.
+// Frames are read as grey levels. One detector sees the frames in order, as a node would (its
+// previous pose settles the planar ambiguity); --independent makes a fresh detector for every frame
+// instead.
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -17,6 +20,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -40,7 +44,8 @@ struct Options {
 
 constexpr const char* kUsage =
     "usage: marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N] [--tag-family F])\n"
-    "                    [--fx F --fy F --cx C --cy C] [--independent] FRAME...\n\n"
+    "                    [--fx F --fy F --cx C --cy C] [--distortion K1,K2,P1,P2,K3]\n"
+    "                    [--independent] FRAME...\n\n"
     "Detects the parking sign or an AprilTag in each frame; prints one JSON line per frame";
 
 namespace po = boost::program_options;
@@ -50,6 +55,7 @@ namespace po = boost::program_options;
 Options parse(int argc, char** argv) {
   Options options;
   follow_bot::TagDetectorConfig tag;
+  std::string distortion;
   po::options_description described(kUsage);
   described.add_options()("help,h", "print this help and exit")(
       "sign", po::value(&options.sign_image)->value_name("IMAGE"), "the sign's reference image")(
@@ -62,6 +68,8 @@ Options parse(int argc, char** argv) {
       "fy", po::value(&options.camera.fy)->default_value(options.camera.fy), "focal length, px")(
       "cx", po::value(&options.camera.cx)->default_value(options.camera.cx), "principal point, px")(
       "cy", po::value(&options.camera.cy)->default_value(options.camera.cy), "principal point, px")(
+      "distortion", po::value(&distortion)->value_name("K1,K2,P1,P2,K3"),
+      "raw frames through this plumb_bob lens")(
       "independent", po::bool_switch(&options.independent), "a fresh detector for every frame");
   po::options_description all;
   all.add(described).add_options()("frames", po::value(&options.frames));
@@ -79,6 +87,17 @@ Options parse(int argc, char** argv) {
   if (problem.empty() && values.count("help")) {
     std::cout << described;
     std::exit(0);
+  }
+  if (problem.empty() && !distortion.empty()) {
+    std::vector<double> coefficients;
+    std::istringstream list(distortion);
+    for (std::string item; std::getline(list, item, ',');)
+      coefficients.push_back(std::atof(item.c_str()));
+    const cv::Matx33d k(options.camera.fx, 0, options.camera.cx, 0, options.camera.fy,
+                        options.camera.cy, 0, 0, 1);
+    options.camera.lens = follow_bot::CameraLens{k, coefficients, cv::Matx33d::eye()};
+    problem = follow_bot::validate(options.camera);
+    if (!problem.empty()) problem = "--distortion: " + problem;
   }
   if (problem.empty()) {
     if (values.count("tag-size")) options.tag = tag;

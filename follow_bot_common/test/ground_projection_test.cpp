@@ -2,9 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
 
 namespace follow_bot {
 namespace {
@@ -161,6 +165,81 @@ TEST(GroundProjection, ValidateNamesTheBadField) {
   EXPECT_EQ(validate(camera), "");
   camera.x_offset_m = kNaN;
   EXPECT_NE(validate(camera).find("x_offset_m"), std::string::npos);
+}
+
+// The harness's turtlebot3 lens (harness/src/harness/camera.py): visible barrel distortion.
+CameraGeometry barrelCamera() {
+  CameraGeometry camera = harnessCamera();
+  const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  camera.lens = CameraLens{k, {-0.28, 0.07, 0.0, 0.0, 0.0}, cv::Matx33d::eye()};
+  return camera;
+}
+
+TEST(RectifyPixels, WithoutALensPixelsAreUnchanged) {
+  const std::vector<cv::Point2d> raw = {{0.0, 0.0}, {319.5, 240.25}, {639.0, 479.0}};
+  EXPECT_EQ(rectifyPixels(harnessCamera(), raw), raw);
+  EXPECT_EQ(rectifyPixel(harnessCamera(), {12.5, 400.0}), cv::Point2d(12.5, 400.0));
+}
+
+TEST(RectifyPixels, UndoesTheLensToTheRectifiedPinhole) {
+  // Rays through the whole frame, corners included: cv::projectPoints with K and D puts each
+  // where the lens images it; rectified, it must land where the pinhole (P = K) puts it.
+  const CameraGeometry camera = barrelCamera();
+  std::vector<cv::Point3d> rays;
+  for (double x = -0.7; x <= 0.7; x += 0.1) {
+    for (double y = -0.5; y <= 0.5; y += 0.1) rays.emplace_back(x, y, 1.0);
+  }
+  std::vector<cv::Point2d> raw;
+  cv::projectPoints(rays, cv::Vec3d(), cv::Vec3d(), camera.lens->camera_matrix,
+                    camera.lens->distortion, raw);
+  const std::vector<cv::Point2d> rectified = rectifyPixels(camera, raw);
+  ASSERT_EQ(rectified.size(), rays.size());
+  double moved = 0.0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const cv::Point2d pinhole(camera.cx + camera.fx * rays[i].x, camera.cy + camera.fy * rays[i].y);
+    EXPECT_NEAR(rectified[i].x, pinhole.x, 1e-6) << rays[i];
+    EXPECT_NEAR(rectified[i].y, pinhole.y, 1e-6) << rays[i];
+    moved = std::max(moved, cv::norm(raw[i] - pinhole));
+  }
+  EXPECT_GT(moved, 20.0) << "the lens must matter for this test to mean anything";
+  // The float overload (the sign's keypoints) agrees to float precision.
+  const std::vector<cv::Point2f> raw32(raw.begin(), raw.end());
+  const std::vector<cv::Point2f> rectified32 = rectifyPixels(camera, raw32);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    EXPECT_NEAR(rectified32[i].x, rectified[i].x, 1e-3);
+    EXPECT_NEAR(rectified32[i].y, rectified[i].y, 1e-3);
+  }
+}
+
+TEST(RectifyPixels, RectifiedIntrinsicsMayDifferFromTheRawOnes) {
+  // P != K (a calibration's new camera matrix): rectified pixels are P's.
+  CameraGeometry camera = barrelCamera();
+  camera.fx = camera.fy = 500.0;
+  camera.cx = 310.0;
+  const cv::Point3d ray(0.3, -0.2, 1.0);
+  std::vector<cv::Point2d> raw;
+  cv::projectPoints(std::vector<cv::Point3d>{ray}, cv::Vec3d(), cv::Vec3d(),
+                    camera.lens->camera_matrix, camera.lens->distortion, raw);
+  const cv::Point2d rectified = rectifyPixel(camera, raw.front());
+  EXPECT_NEAR(rectified.x, 310.0 + 500.0 * 0.3, 1e-6);
+  EXPECT_NEAR(rectified.y, 240.0 - 500.0 * 0.2, 1e-6);
+}
+
+TEST(RectifyPixels, ValidateRejectsABrokenLens) {
+  EXPECT_EQ(validate(barrelCamera()), "");
+  CameraGeometry camera = barrelCamera();
+  camera.lens->distortion = {-0.28, 0.07, 0.0};
+  EXPECT_NE(validate(camera).find("lens D"), std::string::npos) << validate(camera);
+  camera.lens->distortion = {kNaN, 0.07, 0.0, 0.0, 0.0};
+  EXPECT_NE(validate(camera).find("lens D"), std::string::npos);
+  camera = barrelCamera();
+  camera.lens->camera_matrix(0, 0) = 0.0;
+  EXPECT_NE(validate(camera).find("lens K fx"), std::string::npos);
+  camera = barrelCamera();
+  camera.lens->rectification(0, 1) = 0.5;
+  EXPECT_NE(validate(camera).find("lens R"), std::string::npos);
+  camera.lens->rectification = cv::Matx33d::eye() * kNaN;
+  EXPECT_NE(validate(camera).find("lens R"), std::string::npos);
 }
 
 }  // namespace

@@ -17,7 +17,7 @@ namespace follow_bot {
 struct MarkerObservation {
   int id = -1;  // tag id; 0 for a sign
   std::array<cv::Point2d, 4>
-      corners;  // pixels (OpenCV centres): TL, TR, BR, BL seen from the front
+      corners;  // rectified pixels (OpenCV centres): TL, TR, BR, BL seen from the front
   cv::Matx33d rotation = cv::Matx33d::eye();
   cv::Vec3d translation;             // marker centre
   double reprojection_error_px = 0;  // RMS over the corners (tag) or the inliers (sign)
@@ -27,8 +27,9 @@ struct MarkerObservation {
 class MarkerDetector {
  public:
   virtual ~MarkerDetector() = default;
-  // The configured marker in a mono8 image, or nothing. Only the intrinsics of `camera` are
-  // used; images are rectified (CameraInfo with zero distortion).
+  // The configured marker in a mono8 image, or nothing. Only the intrinsics and the lens of
+  // `camera` are used: a raw frame's points are rectified (rectifyPixels) before the pose, and
+  // the corners are the rectified camera's pixels.
   virtual std::optional<MarkerObservation> detect(const cv::Mat& gray,
                                                   const CameraGeometry& camera) = 0;
 };

@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {
@@ -93,11 +95,53 @@ std::optional<cv::Point3d> sphereCentreFromCircle(const CameraGeometry& camera,
   return centre;
 }
 
+namespace {
+
+// What the range estimates measure on a blob, in the rectified camera's pixels: a raw frame's
+// contour goes through the lens first, then the circle and width are those of the rectified
+// contour (without a lens, the blob's own).
+struct RectifiedBlob {
+  std::vector<cv::Point2d> contour;
+  cv::Point2d circle_centre;
+  double circle_radius = 0.0;
+  double width = 0.0;  // px, inclusive as a bounding box's
+};
+
+RectifiedBlob rectifiedBlob(const ColourBlob& blob, const CameraGeometry& camera) {
+  RectifiedBlob rectified;
+  const std::vector<cv::Point2d> raw(blob.contour.begin(), blob.contour.end());
+  rectified.contour = rectifyPixels(camera, raw);
+  if (!camera.lens) {
+    rectified.circle_centre = blob.circle_centre;
+    rectified.circle_radius = blob.circle_radius;
+    rectified.width = blob.bounding_box.width;
+    return rectified;
+  }
+  std::vector<cv::Point2f> contour(rectified.contour.begin(), rectified.contour.end());
+  if (contour.empty()) return rectified;
+  cv::Point2f centre;
+  float radius = 0.0f;
+  std::vector<cv::Point2f> hull;
+  cv::convexHull(contour, hull);
+  cv::minEnclosingCircle(hull, centre, radius);
+  rectified.circle_centre = centre;
+  rectified.circle_radius = radius;
+  const auto [left, right] =
+      std::minmax_element(rectified.contour.begin(), rectified.contour.end(),
+                          [](const cv::Point2d& a, const cv::Point2d& b) { return a.x < b.x; });
+  rectified.width = right->x - left->x + 1.0;
+  return rectified;
+}
+
+}  // namespace
+
 RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_height,
                             const CameraGeometry& camera, const BeaconObject& object) {
   RangeEstimate estimate;
   if (!blob.found || !(object.size_m > 0.0)) return estimate;
+  // Cut by the frame's edges: the raw box against the raw frame.
   const cv::Rect& box = blob.bounding_box;
+  const RectifiedBlob rectified = rectifiedBlob(blob, camera);
   const bool cut_left = box.x <= 0;
   const bool cut_right = box.x + box.width >= image_width;
   const bool cut_top = box.y <= 0;
@@ -106,18 +150,18 @@ RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_h
   if (object.shape == BeaconShape::kSphere) {
     if (cut_left || cut_right || cut_top || cut_bottom) return estimate;
     const std::optional<cv::Point3d> centre = sphereCentreFromCircle(
-        camera, cv::Point2d(blob.circle_centre), blob.circle_radius, object.size_m);
+        camera, rectified.circle_centre, rectified.circle_radius, object.size_m);
     if (centre)
       estimate.from_size = std::max(0.0, std::hypot(centre->x, centre->y) - object.size_m);
     return estimate;
   }
 
   if (!cut_left && !cut_right) {
-    const std::optional<double> depth = rangeFromWidth(camera.fx, object.size_m, box.width);
+    const std::optional<double> depth = rangeFromWidth(camera.fx, object.size_m, rectified.width);
     if (depth) estimate.from_size = std::max(0.0, *depth + camera.x_offset_m);
   }
   if (!cut_bottom) {
-    for (const cv::Point& pixel : blob.contour) {
+    for (const cv::Point2d& pixel : rectified.contour) {
       const std::optional<cv::Point2d> floor = pixelToGround(camera, pixel.x, pixel.y);
       if (!floor) continue;
       const double range = std::hypot(floor->x, floor->y);
@@ -270,9 +314,12 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
   const CameraGeometry& camera = config_.camera;
   const cv::Rect& box = target->bounding_box;
   const bool spans_frame = box.x <= 0 && box.x + box.width >= blobs.image_width;
-  const double column = config_.target.shape == BeaconShape::kBox
-                            ? box.x + 0.5 * (box.width - 1)  // middle of the silhouette
-                            : target->centroid.x;
+  const cv::Point2d aim =
+      config_.target.shape == BeaconShape::kBox
+          ? cv::Point2d(box.x + 0.5 * (box.width - 1),  // middle of the silhouette
+                        box.y + 0.5 * (box.height - 1))
+          : target->centroid;
+  const double column = rectifyPixel(camera, aim).x;  // a raw frame's through the lens
   const double bearing = spans_frame ? 0.0 : std::atan((column - camera.cx) / camera.fx);
   if (bearing != 0.0) search_direction_ = bearing > 0.0 ? -1.0 : 1.0;
   const std::optional<double> range =

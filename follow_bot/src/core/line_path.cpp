@@ -295,8 +295,9 @@ void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
 }
 
 bool PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {
-  const std::optional<cv::Point2d> ground =
-      pixelToGround(camera_, band.centroid_x, band.centroid_y);
+  // A raw frame's centroid goes through the lens first (rectifyPixel: unchanged without one).
+  const cv::Point2d pixel = rectifyPixel(camera_, {band.centroid_x, band.centroid_y});
+  const std::optional<cv::Point2d> ground = pixelToGround(camera_, pixel.x, pixel.y);
   if (!ground) return false;
   const auto latest_of_band =
       std::find_if(points_.rbegin(), points_.rend(),

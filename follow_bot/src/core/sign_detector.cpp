@@ -415,7 +415,8 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
                                                         const CameraGeometry& camera,
                                                         const Matches& matches, bool tracked) {
   const std::vector<cv::Point3f>& inlier_object = matches.object;
-  const std::vector<cv::Point2f>& inlier_image = matches.image;
+  // The pose is the rectified camera's: points of a raw frame go through the lens first.
+  const std::vector<cv::Point2f> inlier_image = rectifyPixels(camera, matches.image);
 
   // Pose points: a grid over the sign mapped by the ECC-refined homography, or else the inlier
   // keypoints themselves. A second pass renders from the first pass's better homography.
@@ -438,6 +439,7 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
       }
     }
     cv::perspectiveTransform(grid, pose_image, cv::Mat(plane_to_image));
+    pose_image = rectifyPixels(camera, pose_image);
   }
 
   // Planar pose: IPPE gives both solutions of the plane's two-fold ambiguity, best first.

@@ -1,5 +1,6 @@
 #include "follow_bot/tag_detector.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <stdexcept>
@@ -205,6 +206,8 @@ std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
       image.emplace_back(best->p[i][0] - kApriltagPixelCentre,
                          best->p[i][1] - kApriltagPixelCentre);
     }
+    // The pose is the rectified camera's: corners of a raw frame go through the lens first.
+    image = rectifyPixels(camera, image);
     for (int i = 0; i < 4; ++i) out->corners[i] = image[3 - i];  // apriltag wraps BL, BR, TR, TL
 
     // Both minima of the planar pose problem (IPPE for a square, object points in apriltag's
@@ -226,7 +229,9 @@ std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
         candidates.push_back(candidate);
       }
     }
-    if (candidates.empty()) {
+    if (candidates.empty() || !std::all_of(image.begin(), image.end(), [](const cv::Point2d& p) {
+          return std::isfinite(p.x) && std::isfinite(p.y);
+        })) {
       out.reset();
     } else {
       std::size_t pick = 0;

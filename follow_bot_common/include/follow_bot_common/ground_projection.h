@@ -8,14 +8,24 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
 namespace follow_bot {
 
+// The lens between the scene and a raw (unrectified) image, CameraInfo's K, D and R: what maps a
+// raw pixel to the rectified camera of CameraGeometry (image_geometry's rectifyPoint).
+struct CameraLens {
+  cv::Matx33d camera_matrix;                       // K of the raw image
+  std::vector<double> distortion;                  // D in OpenCV's order: 4, 5, 8, 12 or 14
+  cv::Matx33d rectification = cv::Matx33d::eye();  // R
+};
+
 // Defaults are the harness camera: 640x480, 60 deg horizontal field of view, 0.3 m up, 20 deg down.
 struct CameraGeometry {
-  // Intrinsics in pixels, from CameraInfo K = [fx 0 cx; 0 fy cy; 0 0 1]; no distortion.
+  // Intrinsics of the rectified camera in pixels, CameraInfo P = [fx 0 cx 0; 0 fy cy 0; 0 0 1 0]
+  // (= K for a lens without distortion): what every pixel-to-ray computation uses.
   double fx = 554.256;
   double fy = 554.256;
   double cx = 320.0;
@@ -23,10 +33,23 @@ struct CameraGeometry {
   double height_m = 0.30;                                    // optical centre above the floor
   double pitch_rad = 20.0 * 3.14159265358979323846 / 180.0;  // positive tilts the axis down
   double x_offset_m = 0.0;                                   // optical centre forward of base_link
+  // Frames come through this lens (image_raw of a distorting camera): pixels are rectified with
+  // rectifyPixels before any geometry. None: the frames are rectified (or the lens is a pinhole).
+  std::optional<CameraLens> lens;
 };
 
 // Empty when the geometry is usable, otherwise a message naming the first bad field.
 std::string validate(const CameraGeometry& camera);
+
+// Raw image pixels (column, row) moved to where the rectified camera (fx, fy, cx, cy) sees the
+// same rays: cv::undistortPoints with K, D, R and P, as image_geometry's rectifyPoint, but in
+// double precision and iterated to convergence (strong barrel lenses need more than OpenCV's
+// default 5 iterations near the corners). Unchanged without a lens.
+std::vector<cv::Point2d> rectifyPixels(const CameraGeometry& camera,
+                                       const std::vector<cv::Point2d>& raw);
+std::vector<cv::Point2f> rectifyPixels(const CameraGeometry& camera,
+                                       const std::vector<cv::Point2f>& raw);
+cv::Point2d rectifyPixel(const CameraGeometry& camera, const cv::Point2d& raw);
 
 // The floor point (x forward, y left, metres in base_link) seen at pixel (u, v) = (column, row),
 // pixel centres at integer coordinates as in cv::moments. Empty for pixels at or above the

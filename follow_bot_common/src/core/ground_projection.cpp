@@ -1,7 +1,10 @@
 #include "follow_bot_common/ground_projection.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+
+#include <opencv2/calib3d.hpp>
 
 #include "follow_bot_common/config_checks.h"
 
@@ -9,6 +12,38 @@ namespace follow_bot {
 namespace {
 
 constexpr double kMaxPitchRad = 89.0 * 3.14159265358979323846 / 180.0;
+
+// The distortion vector lengths cv::undistortPoints accepts (plumb_bob: 5, rational_polynomial: 8).
+bool usableDistortionSize(size_t size) {
+  return size == 4 || size == 5 || size == 8 || size == 12 || size == 14;
+}
+
+std::string validateLens(const CameraLens& lens) {
+  const cv::Matx33d& k = lens.camera_matrix;
+  for (const std::string& error : {
+           requirePositive("lens K fx", k(0, 0)),
+           requirePositive("lens K fy", k(1, 1)),
+           requireFinite("lens K cx", k(0, 2)),
+           requireFinite("lens K cy", k(1, 2)),
+       }) {
+    if (!error.empty()) return error;
+  }
+  if (!usableDistortionSize(lens.distortion.size())) {
+    return "lens D must have 4, 5, 8, 12 or 14 coefficients, got " +
+           std::to_string(lens.distortion.size());
+  }
+  if (!std::all_of(lens.distortion.begin(), lens.distortion.end(),
+                   [](double d) { return std::isfinite(d); })) {
+    return "lens D must be finite";
+  }
+  // R rotates the raw camera into the rectified one: orthonormal with determinant 1.
+  const cv::Matx33d& r = lens.rectification;
+  const double off_identity = cv::norm(r * r.t() - cv::Matx33d::eye(), cv::NORM_INF);
+  if (!(off_identity < 1e-6) || !(std::abs(cv::determinant(r) - 1.0) < 1e-6)) {
+    return "lens R must be a rotation matrix";
+  }
+  return "";
+}
 
 }  // namespace
 
@@ -29,7 +64,38 @@ std::string validate(const CameraGeometry& camera) {
     message << "pitch_rad must be within +-89 deg, got " << camera.pitch_rad;
     return message.str();
   }
-  return "";
+  return camera.lens ? validateLens(*camera.lens) : "";
+}
+
+namespace {
+
+template <typename Point>
+std::vector<Point> undistorted(const CameraGeometry& camera, const std::vector<Point>& raw) {
+  if (!camera.lens || raw.empty()) return raw;
+  const CameraLens& lens = *camera.lens;
+  const cv::Matx33d rectified(camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0);
+  std::vector<Point> rectified_pixels;
+  cv::undistortPoints(
+      raw, rectified_pixels, lens.camera_matrix, lens.distortion, lens.rectification, rectified,
+      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-12));
+  return rectified_pixels;
+}
+
+}  // namespace
+
+std::vector<cv::Point2d> rectifyPixels(const CameraGeometry& camera,
+                                       const std::vector<cv::Point2d>& raw) {
+  return undistorted(camera, raw);
+}
+
+std::vector<cv::Point2f> rectifyPixels(const CameraGeometry& camera,
+                                       const std::vector<cv::Point2f>& raw) {
+  return undistorted(camera, raw);
+}
+
+cv::Point2d rectifyPixel(const CameraGeometry& camera, const cv::Point2d& raw) {
+  if (!camera.lens) return raw;
+  return rectifyPixels(camera, std::vector<cv::Point2d>{raw}).front();
 }
 
 std::optional<cv::Point2d> pixelToGround(const CameraGeometry& camera, double u, double v) {

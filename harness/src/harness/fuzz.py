@@ -184,13 +184,45 @@ def malformed_compressed() -> list:
     return messages
 
 
+def broken_camera_infos() -> list:
+    """CameraInfos a node must ignore (NaN or zero K, P; a D of the wrong size for its model, an
+    unknown model with distortion, NaN D, an R that is no rotation) and lenses that are usable
+    but extreme, each followed by a valid frame, which the node then reads through that lens
+    (case `broken_camera_info`)."""
+    nan = float("nan")
+    barrel = [-0.28, 0.07, 0.0, 0.0, 0.0]
+    broken = [
+        {"K": [nan] * 9},
+        {"K": [0.0] * 9, "P": [0.0] * 12},
+        {"P": [nan] * 12},
+        {"D": barrel[:3]},
+        {"distortion_model": "rational_polynomial", "D": barrel},
+        {"distortion_model": "equidistant", "D": barrel[:4]},
+        {"D": [nan, 0.0, 0.0, 0.0, 0.0]},
+        {"D": barrel, "R": [2.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]},
+        {"D": [1e308, -1e308, 1e308, 0.0, 1e308]},
+        {"D": [50.0, 0.0, 0.0, 0.0, 0.0]},
+        {"D": barrel, "P": [0.0] * 12},
+        {"D": barrel},
+    ]
+    line = probe_frame("line")
+    messages = []
+    for fields in broken:
+        info = camera_info_msg()
+        for name, value in fields.items():
+            setattr(info, name, value)
+        info.header.stamp.secs = 1000
+        messages += [info, line]
+    return messages
+
+
 # Cases sent through the `compressed` transport: the nodes run with _image_transport:=compressed.
 COMPRESSED_CASES = {"malformed_compressed"}
 
 
 def crash_cases() -> dict[str, list]:
-    """The four killers found by the first fuzzing run (issue 12), each a short message list, and
-    malformed payloads of the compressed transport (issue 14)."""
+    """The four killers found by the first fuzzing run (issue 12), each a short message list,
+    malformed payloads of the compressed transport and broken camera_info (issue 14)."""
     line = probe_frame("line")
     return {
         # Passes step >= width*2 and data == height*step, but a 16-bit cv::Mat needs an even step.
@@ -205,6 +237,7 @@ def crash_cases() -> dict[str, list]:
             for w, h in [(4, 4), (640, 1), (640, 2), (640, 3), (640, 4), (66, 3), (1, 1), (3, 640)]
         ],
         "malformed_compressed": malformed_compressed(),
+        "broken_camera_info": broken_camera_infos(),
     }
 
 
@@ -284,6 +317,8 @@ class Storm:
         info.D = [r.choice([*special, 0.1]) for _ in range(r.choice([0, 1, 5, 8, 14, 50]))]
         info.K = [k if r.random() < 0.8 else r.choice(special) for k in info.K]
         info.distortion_model = r.choice(["plumb_bob", "rational_polynomial", "", "??"])
+        info.R = [x if r.random() < 0.9 else r.choice(special) for x in info.R]
+        info.P = [x if r.random() < 0.8 else r.choice(special) for x in info.P]
         info.header.stamp.secs, info.header.stamp.nsecs = self.stamp()
         return info
 
@@ -616,8 +651,9 @@ def run(keys, messages, seed, cases, log_dir: Path, pause: float) -> list[dict]:
                 node.prepare()
             if case_msgs is not None:
                 for msg in case_msgs:
+                    kind = "camera_info" if msg._type == "sensor_msgs/CameraInfo" else "image"
                     for node in nodes:
-                        node.send(msg, "image", 0)
+                        node.send(msg, kind, 0)
                     time.sleep(0.1)
                     for node in nodes:
                         node.keep_capturing()

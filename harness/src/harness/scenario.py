@@ -519,7 +519,9 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         err["still_since"] = scoring.still_since(t, run["v"], run["w"])
         out["parking"] = err
     if scenario.watch and len(t):
-        out["watch"] = stop_on_sight(world, find_object(world, scenario.watch, "watch"), run)
+        out["watch"] = stop_on_sight(
+            world, find_object(world, scenario.watch, "watch"), run, scenario.perturbations.lens
+        )
     dropouts = []
     for start, end in scenario.perturbations.dropouts:
         stop = _stop_in_window(run, start, end)
@@ -540,19 +542,20 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
     return out
 
 
-def stop_on_sight(world: World, obj, run: dict[str, np.ndarray]) -> dict:
+def stop_on_sight(world: World, obj, run: dict[str, np.ndarray], lens=None) -> dict:
     """When part of `obj` first comes into the camera's view, how long until a zero command, and
     how many later steps with it in view still had a non-zero command. Spheres count as in view
-    once their silhouette (centre +- projected radius) overlaps the image; others by centre."""
+    once their silhouette (centre +- projected radius) overlaps the image; others by centre.
+    `lens`: the run's lens instead of the world's (a barrel lens sees wider than its pinhole)."""
     centre = object_centre(obj)
     radius = getattr(obj, "radius", 0.0)
-    cam = world.camera
+    cam = world.camera if lens is None else replace(world.camera, distortion=lens)
     in_view = np.zeros(len(run["t"]), dtype=bool)
     for k, pose in enumerate(zip(run["x"], run["y"], run["yaw"], strict=True)):
         uv, depth = cam.project(centre[None, :], pose)
         if depth[0] <= 0:
             continue
-        u, v = uv[0]
+        u, v = cam.distort_pixels(uv)[0] if cam.distorted else uv[0]
         margin = cam.fx * radius / depth[0]
         in_view[k] = -margin <= u < cam.width + margin and -margin <= v < cam.height + margin
     seen = np.nonzero(in_view)[0]

@@ -58,7 +58,9 @@ struct BehaviourOptions {
 //    the same configure(): a rejected update changes nothing and the server reports back the
 //    settings in force. Any start-up error names the ~param and fails the load (CheckedNodelet).
 //  * `camera/rgb/camera_info` (queue 1; names relative to the namespace, follow_bot_common/ros/
-//    topics.h): usable intrinsics go into camera(), unusable ones are ignored with
+//    topics.h): usable intrinsics go into camera() (updateIntrinsics: the rectified camera P
+//    and, unless ~image_rectified says the frames are image_rect, the lens K, D, R whose
+//    distortion the cores undo on the pixels they use), unusable ones are ignored with
 //    a throttled error. A separate subscription, not a CameraSubscriber: a behaviour keeps
 //    running on frames when camera_info is late or missing (then it says what it cannot do).
 //  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
@@ -129,6 +131,7 @@ class BehaviourNodelet : public CheckedNodelet {
     applied_config_ = readConfig<Config>(pnh);  // throws on bad ~params
     camera_ = readCameraMounting(pnh);
     mounting_ = std::make_unique<CameraMountingSource>(nh, pnh, camera_, getName());
+    image_rectified_ = param(pnh, "image_rectified", false);
     setup(nh, pnh, applied_config_);
     configure(applied_config_);
     output_ = std::make_unique<CommandOutput>(nh, pnh, options_.allow_reverse);
@@ -164,7 +167,7 @@ class BehaviourNodelet : public CheckedNodelet {
 
   void onCameraInfo(const sensor_msgs::CameraInfo& info) {
     bool changed = false;
-    const std::string error = updateIntrinsics(info, camera_, changed);
+    const std::string error = updateIntrinsics(info, image_rectified_, camera_, changed);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
       return;
@@ -225,6 +228,7 @@ class BehaviourNodelet : public CheckedNodelet {
   Config applied_config_;         // the settings in force, reported back after a rejected update
   CameraGeometry camera_;
   std::unique_ptr<CameraMountingSource> mounting_;
+  bool image_rectified_ = false;  // frames are rectified already: camera_info's D is not applied
   bool has_intrinsics_ = false;
   std::string camera_info_topic_;
   std::string image_topic_;

@@ -3,13 +3,17 @@
 // guard around every callback.
 #pragma once
 
+#include <algorithm>
 #include <exception>
+#include <optional>
 #include <string>
 
 #include <cv_bridge/cv_bridge.h>
+#include <image_geometry/pinhole_camera_model.h>
 #include <ros/console.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
+#include <sensor_msgs/distortion_models.h>
 #include <sensor_msgs/image_encodings.h>
 #include <boost/make_shared.hpp>
 
@@ -64,20 +68,56 @@ bool guardedCallback(const char* what, Work&& work) {
   return false;
 }
 
-// Copies CameraInfo's K into `camera` when it is usable. Returns "" on success, otherwise why
-// the message was ignored (`camera` then unchanged). `changed` tells whether the intrinsics
-// differ from before.
-inline std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, CameraGeometry& camera,
-                                    bool& changed) {
+// How many distortion coefficients a CameraInfo distortion_model takes (0: a model OpenCV's
+// undistortPoints cannot apply).
+inline size_t distortionSize(const std::string& model) {
+  if (model == sensor_msgs::distortion_models::PLUMB_BOB) return 5;
+  if (model == sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL) return 8;
+  return 0;
+}
+
+inline bool sameLens(const std::optional<CameraLens>& a, const std::optional<CameraLens>& b) {
+  if (!a || !b) return !a && !b;
+  return a->camera_matrix == b->camera_matrix && a->distortion == b->distortion &&
+         a->rectification == b->rectification;
+}
+
+// The intrinsics side of `camera` from a CameraInfo, through image_geometry's PinholeCameraModel:
+// the rectified camera from P (K when P is all zero, an uncalibrated P) and, for raw frames
+// (`image_rectified` false) through a lens with distortion, the lens (K, D, R) the cores rectify
+// their pixels with. Frames already rectified (image_proc's image_rect) use P alone. Returns ""
+// on success, otherwise why the message was ignored (`camera` then unchanged). `changed` tells
+// whether the intrinsics differ from before.
+inline std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, bool image_rectified,
+                                    CameraGeometry& camera, bool& changed) {
+  image_geometry::PinholeCameraModel model;
+  model.fromCameraInfo(info);
+  const cv::Matx33d k = model.fullIntrinsicMatrix();
+  const cv::Matx34d p = model.fullProjectionMatrix();
+  const bool p_unset = p == cv::Matx34d::zeros();
   CameraGeometry updated = camera;
-  updated.fx = info.K[0];
-  updated.fy = info.K[4];
-  updated.cx = info.K[2];
-  updated.cy = info.K[5];
+  updated.fx = p_unset ? k(0, 0) : p(0, 0);
+  updated.fy = p_unset ? k(1, 1) : p(1, 1);
+  updated.cx = p_unset ? k(0, 2) : p(0, 2);
+  updated.cy = p_unset ? k(1, 2) : p(1, 2);
+  updated.lens.reset();
+  const bool distorted = std::any_of(info.D.begin(), info.D.end(), [](double d) { return d != 0; });
+  if (!image_rectified && distorted) {
+    const size_t size = distortionSize(info.distortion_model);
+    if (size == 0) {
+      return "distortion_model '" + info.distortion_model +
+             "' is not supported (plumb_bob, rational_polynomial), or send rectified frames";
+    }
+    if (info.D.size() != size) {
+      return "D of a " + info.distortion_model + " lens must have " + std::to_string(size) +
+             " coefficients, got " + std::to_string(info.D.size());
+    }
+    updated.lens = CameraLens{k, info.D, model.rotationMatrix()};
+  }
   const std::string error = validate(updated);
   if (!error.empty()) return error;
   changed = updated.fx != camera.fx || updated.fy != camera.fy || updated.cx != camera.cx ||
-            updated.cy != camera.cy;
+            updated.cy != camera.cy || !sameLens(updated.lens, camera.lens);
   camera = updated;
   return "";
 }
