@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
@@ -21,14 +22,16 @@ void paintStripe(cv::Mat& frame, int x, int width, int top, int bottom) {
   frame(cv::Range(top, bottom), cv::Range(x, x + width)).setTo(kYellow);
 }
 
-// The lecture's mask: full-frame HSV, inRange, every row outside the band zeroed.
+// The lecture's mask: full-frame HSV, inRange, every row outside the band (as placed for the
+// default camera) zeroed.
 cv::Mat referenceMask(const cv::Mat& bgr, const LineDetectorConfig& config) {
   cv::Mat hsv, mask;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
   cv::inRange(hsv, cv::Scalar(config.lower.h, config.lower.s, config.lower.v),
               cv::Scalar(config.upper.h, config.upper.s, config.upper.v), mask);
-  const int top = static_cast<int>(config.band.top_fraction * bgr.rows);
-  const int bottom = std::min(top + config.band.rows, bgr.rows);
+  const BandPlacement band = placeBand(CameraGeometry(), config.band, bgr.rows);
+  const int top = band.row_begin;
+  const int bottom = band.row_end;
   for (int y = 0; y < bgr.rows; ++y) {
     if (y < top || y >= bottom) mask.row(y).setTo(0);
   }
@@ -73,9 +76,18 @@ TEST(LineDetector, DefaultsAreTheLecture) {
   EXPECT_EQ(config.lower.s, 100);
   EXPECT_EQ(config.lower.v, 100);
   EXPECT_EQ(config.upper.h, 30);
-  EXPECT_DOUBLE_EQ(config.band.top_fraction, 0.75);
   EXPECT_EQ(config.band.rows, 20);
   EXPECT_FALSE(config.look_ahead_enabled);
+  // On the default mounting the bands land where the lecture's fractions put them: rows
+  // [3/4 h, 3/4 h + 20) and [floor(0.55 h), that + 20) of 480.
+  const BandPlacement band = placeBand(CameraGeometry(), config.band, 480);
+  EXPECT_EQ(band.row_begin, 360);
+  EXPECT_EQ(band.row_end, 380);
+  EXPECT_FALSE(band.clamped);
+  const BandPlacement look_ahead = placeBand(CameraGeometry(), config.look_ahead, 480);
+  EXPECT_EQ(look_ahead.row_begin, 264);
+  EXPECT_EQ(look_ahead.row_end, 284);
+  EXPECT_FALSE(look_ahead.clamped);
 }
 
 TEST(LineDetector, FindsAStripeAtItsColumn) {
@@ -227,13 +239,14 @@ TEST(LineDetector, FewPixelsGiveACentroidButNotFound) {
 
 TEST(LineDetector, ClipsTheBandToSmallFrames) {
   LineDetector detector;
-  cv::Mat tiny(10, 12, CV_8UC3, kYellow);  // band rows [7, 27) clip to [7, 10)
+  cv::Mat tiny(10, 12, CV_8UC3, kYellow);  // shorter than the band: all its rows
   BandMeasurement band = detector.detect(tiny).band;
-  EXPECT_EQ(band.row_begin, 7);
+  EXPECT_EQ(band.row_begin, 0);
   EXPECT_EQ(band.row_end, 10);
-  EXPECT_EQ(band.pixel_count, 36);
+  EXPECT_TRUE(band.clamped);
+  EXPECT_EQ(band.pixel_count, 120);
   EXPECT_TRUE(band.found);
-  EXPECT_DOUBLE_EQ(band.centroid_y, 8.0);
+  EXPECT_DOUBLE_EQ(band.centroid_y, 4.5);
 
   cv::Mat one_pixel(1, 1, CV_8UC3, kYellow);
   band = detector.detect(one_pixel).band;
@@ -274,7 +287,8 @@ TEST(LineDetector, ReadsRegionsOfInterestWithTheirStride) {
 TEST(LineDetector, MeasuresTheLookAheadBandWhenEnabled) {
   LineDetectorConfig config;
   config.look_ahead_enabled = true;
-  config.look_ahead = {0.5, 10};  // rows [240, 250)
+  // Rows [240, 250): centred on row 244.5 of the default camera.
+  config.look_ahead = {pixelToGround(CameraGeometry(), 320.0, 244.5)->x, 10};
   cv::Mat frame = greyFrame();
   paintStripe(frame, 400, 10, 240, 250);
   paintStripe(frame, 300, 10, 360, 380);
@@ -369,8 +383,13 @@ TEST(LineDetector, ValidatesItsConfiguration) {
             "upper.v must be in [0, 255], got 256");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.lower.h = 40; }),
             "lower.h (40) must be <= upper.h (30); the box would match nothing");
-  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.band.top_fraction = 1.0; }),
-            "band.top_fraction must be in [0, 1), got 1");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.band.distance_m = 0.0; }),
+            "band.distance_m must be > 0, got 0");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) {
+              c.look_ahead_enabled = true;
+              c.look_ahead.distance_m = c.band.distance_m;
+            }),
+            "look_ahead.distance_m (0.46) must be beyond band.distance_m (0.46)");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.look_ahead.rows = 0; }),
             "look_ahead.rows must be in [1, 65536], got 0");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.min_pixels = 0; }),
