@@ -31,7 +31,7 @@ FAMILIES = {
 # `make test` plays these runs: every fault run (camera dropout, a hidden marker) and at least
 # one nominal run of each family; `make test-full` (pytest -m full too) plays every run.
 QUICK = {
-    "follower/lap_fast", "follower/dropout", "follower_mounting/h0.4_pitch0",
+    "follower/lap_fast", "follower/dropout", "follower_mounting/h0.2_pitch0",
     "dumpster/2m_30deg",
     "beacons_follow_green/dropout",
     "beacons_red_stop/plain",
