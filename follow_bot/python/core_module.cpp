@@ -102,10 +102,21 @@ void bindLineDetector(py::module_& m) {
   defKeywordInit(hsv);
 
   py::class_<BandConfig> band(m, "BandConfig",
-                              "Rows [floor(top_fraction * height), that + rows) of the frame.");
-  band.def_readwrite("top_fraction", &BandConfig::top_fraction)
+                              "`rows` rows of the frame centred on the floor `distance_m` ahead "
+                              "of base_link (see place_band).");
+  band.def_readwrite("distance_m", &BandConfig::distance_m)
       .def_readwrite("rows", &BandConfig::rows);
   defKeywordInit(band);
+
+  py::class_<BandPlacement> placement(m, "BandPlacement");
+  placement.def_readwrite("row_begin", &BandPlacement::row_begin)
+      .def_readwrite("row_end", &BandPlacement::row_end)
+      .def_readwrite("distance_m", &BandPlacement::distance_m)
+      .def_readwrite("clamped", &BandPlacement::clamped);
+  m.def("ground_to_row", &groundToRow, "camera"_a, "distance_m"_a,
+        "The image row of the floor distance_m ahead of base_link (centre column), or None.");
+  m.def("place_band", &placeBand, "camera"_a, "band"_a, "image_height"_a,
+        "The band's rows for this camera, clamped into the floor it sees.");
 
   py::class_<LineDetectorConfig> config(m, "LineDetectorConfig");
   config.def_readwrite("lower", &LineDetectorConfig::lower)
@@ -126,7 +137,9 @@ void bindLineDetector(py::module_& m) {
       .def_readwrite("error_normalised", &BandMeasurement::error_normalised)
       .def_readwrite("confidence", &BandMeasurement::confidence)
       .def_readwrite("row_begin", &BandMeasurement::row_begin)
-      .def_readwrite("row_end", &BandMeasurement::row_end);
+      .def_readwrite("row_end", &BandMeasurement::row_end)
+      .def_readwrite("distance_m", &BandMeasurement::distance_m)
+      .def_readwrite("clamped", &BandMeasurement::clamped);
   defKeywordInit(measurement);
 
   py::class_<LineMeasurement> line(m, "LineMeasurement");
@@ -140,7 +153,8 @@ void bindLineDetector(py::module_& m) {
 
   py::class_<LineDetector>(m, "LineDetector",
                            "The follower's floor-line detector: the lecture's HSV band centroid.")
-      .def(py::init<const LineDetectorConfig&>(), "config"_a = LineDetectorConfig())
+      .def(py::init<const LineDetectorConfig&, const CameraGeometry&>(),
+           "config"_a = LineDetectorConfig(), "camera"_a = CameraGeometry())
       .def(
           "detect",
           [](const LineDetector& detector, const py::handle& bgr,

@@ -19,23 +19,27 @@ lab.start("line_follower", __doc__, {
     "mode": "steering law: pd (default; with kd 0, P control), lecture or path",
     "max_linear": "top speed, m/s (0.3)", "kp": "rad/s per unit of normalised error (1.5)",
     "kd": "rad/s per unit of error per s (0: P control)",
-    "band_top_fraction": "crop: first row, as a fraction of the height (0.75)",
+    "band_distance": "crop: the rows showing the floor this far ahead, m (0.46; the lecture's "
+                     "3/4 of the height on the default mounting)",
     "watchdog_timeout": "s without a frame before one zero Twist (0.15)",
-    "camera_height": "path: optical centre above the floor, m (default: the C++ nodes' one)",
-    "camera_pitch_deg": "path: camera pitch, deg, down positive (default: the C++ nodes' one)",
-    "camera_x_offset": "path: optical centre forward of base_link, m (default: the C++ nodes' one)",
+    "camera_height": "optical centre above the floor, m (default: the C++ nodes' one)",
+    "camera_pitch_deg": "camera pitch, deg, down positive (default: the C++ nodes' one)",
+    "camera_x_offset": "optical centre forward of base_link, m (default: the C++ nodes' one)",
 })  # fmt: skip
 defaults = core.SteeringConfig()
 pd = lab.configured(core.PdConfig, {"kp": defaults.pd.kp, "kd": 0.0})
 params = {"mode": "pd", "max_linear": defaults.max_linear}
 config = lab.configured(core.SteeringConfig, params, pd=pd)
-top = core.LineDetectorConfig().band.top_fraction
-band = lab.configured(core.BandConfig, {"top_fraction": top}, prefix="band_")
-detector = core.LineDetector(lab.configured(core.LineDetectorConfig, {}, band=band))
+distance = core.LineDetectorConfig().band.distance_m
+band = lab.configured(core.BandConfig, {"distance_m": distance}, prefix="band_")
+detector_config = lab.configured(core.LineDetectorConfig, {}, band=band)
+# The band is placed for the camera: the default one until camera_info arrives.
+detector = core.LineDetector(detector_config)
+placed = False  # for the camera_info's camera
 law = core.make_steering_law(config)  # path: pd until camera_info gives the intrinsics
 output = lab.CommandOutput()
 applied = core.Twist2D()
-camera = []  # the intrinsics, once camera_info arrives (path mode)
+camera = []  # the intrinsics and mounting, once camera_info arrives
 
 
 def on_camera_info(info):
@@ -46,7 +50,9 @@ def on_camera_info(info):
 
 
 def on_frame(header, bgr):
-    global applied, law
+    global applied, detector, law, placed
+    if camera and not placed:
+        detector, placed = core.LineDetector(detector_config, camera[0]), True
     if config.mode == core.SteeringMode.path and camera and not isinstance(law, core.PathLaw):
         law = core.make_steering_law(config, camera[0])
     desired = law.step(detector.detect(bgr), header.stamp.to_sec(), applied)

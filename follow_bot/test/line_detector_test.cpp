@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
@@ -21,14 +22,16 @@ void paintStripe(cv::Mat& frame, int x, int width, int top, int bottom) {
   frame(cv::Range(top, bottom), cv::Range(x, x + width)).setTo(kYellow);
 }
 
-// The lecture's mask: full-frame HSV, inRange, every row outside the band zeroed.
+// The lecture's mask: full-frame HSV, inRange, every row outside the band (as placed for the
+// default camera) zeroed.
 cv::Mat referenceMask(const cv::Mat& bgr, const LineDetectorConfig& config) {
   cv::Mat hsv, mask;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
   cv::inRange(hsv, cv::Scalar(config.lower.h, config.lower.s, config.lower.v),
               cv::Scalar(config.upper.h, config.upper.s, config.upper.v), mask);
-  const int top = static_cast<int>(config.band.top_fraction * bgr.rows);
-  const int bottom = std::min(top + config.band.rows, bgr.rows);
+  const BandPlacement band = placeBand(CameraGeometry(), config.band, bgr.rows);
+  const int top = band.row_begin;
+  const int bottom = band.row_end;
   for (int y = 0; y < bgr.rows; ++y) {
     if (y < top || y >= bottom) mask.row(y).setTo(0);
   }
@@ -73,9 +76,131 @@ TEST(LineDetector, DefaultsAreTheLecture) {
   EXPECT_EQ(config.lower.s, 100);
   EXPECT_EQ(config.lower.v, 100);
   EXPECT_EQ(config.upper.h, 30);
-  EXPECT_DOUBLE_EQ(config.band.top_fraction, 0.75);
   EXPECT_EQ(config.band.rows, 20);
   EXPECT_FALSE(config.look_ahead_enabled);
+  // On the default mounting the bands land where the lecture's fractions put them: rows
+  // [3/4 h, 3/4 h + 20) and [floor(0.55 h), that + 20) of 480.
+  const BandPlacement band = placeBand(CameraGeometry(), config.band, 480);
+  EXPECT_EQ(band.row_begin, 360);
+  EXPECT_EQ(band.row_end, 380);
+  EXPECT_FALSE(band.clamped);
+  const BandPlacement look_ahead = placeBand(CameraGeometry(), config.look_ahead, 480);
+  EXPECT_EQ(look_ahead.row_begin, 264);
+  EXPECT_EQ(look_ahead.row_end, 284);
+  EXPECT_FALSE(look_ahead.clamped);
+}
+
+// A camera with round numbers: fx = fy = 500, principal point (320, 240), 640 x 480.
+CameraGeometry roundCamera(double height_m, double pitch_deg, double x_offset_m = 0.0) {
+  CameraGeometry camera;
+  camera.fx = camera.fy = 500.0;
+  camera.cx = 320.0;
+  camera.cy = 240.0;
+  camera.height_m = height_m;
+  camera.pitch_rad = pitch_deg * CV_PI / 180.0;
+  camera.x_offset_m = x_offset_m;
+  return camera;
+}
+
+TEST(GroundToRow, ExactRowsForKnownGeometry) {
+  // Level, 0.5 m up: the floor 2.5 m ahead is 0.5 / 2.5 = 0.2 rad-tangent below the axis.
+  EXPECT_NEAR(*groundToRow(roundCamera(0.5, 0.0), 2.5), 240.0 + 500.0 * 0.2, 1e-9);
+  // 45 deg down, 1 m up: the optical axis meets the floor 1 m ahead of the optical centre, so
+  // the floor there is on the principal row, wherever the camera sits on the base.
+  EXPECT_NEAR(*groundToRow(roundCamera(1.0, 45.0), 1.0), 240.0, 1e-9);
+  EXPECT_NEAR(*groundToRow(roundCamera(1.0, 45.0, 0.2), 1.2), 240.0, 1e-9);
+  // 45 deg down, the floor right under the optical centre: 45 deg below the axis, tan = 1.
+  EXPECT_NEAR(*groundToRow(roundCamera(1.0, 45.0), 0.0), 740.0, 1e-9);
+  // Default camera, 0.46 m: cy + fy tan(atan(0.30 / 0.46) - 20 deg).
+  const CameraGeometry standard;
+  EXPECT_NEAR(*groundToRow(standard, 0.46),
+              240.0 + 554.256 * std::tan(std::atan2(0.30, 0.46) - 20.0 * CV_PI / 180.0), 1e-9);
+}
+
+TEST(GroundToRow, InvertsPixelToGroundAtTheCentreColumn) {
+  for (const double pitch_deg : {-10.0, 0.0, 10.0, 20.0, 30.0, 60.0}) {
+    for (const double height_m : {0.2, 0.5}) {
+      const CameraGeometry camera = roundCamera(height_m, pitch_deg, -0.087);
+      for (int row = 0; row < 480; row += 7) {
+        const std::optional<cv::Point2d> floor = pixelToGround(camera, camera.cx, row);
+        if (!floor) continue;
+        const std::optional<double> back = groundToRow(camera, floor->x);
+        ASSERT_TRUE(back) << pitch_deg << " deg, row " << row;
+        EXPECT_NEAR(*back, row, 1e-6) << pitch_deg << " deg, " << height_m << " m";
+      }
+    }
+  }
+}
+
+TEST(GroundToRow, NothingForFloorNotInFrontOfTheCamera) {
+  // Level camera 0.1 m ahead of base_link: the floor 5 cm ahead of the base is behind it.
+  EXPECT_FALSE(groundToRow(roundCamera(0.3, 0.0, 0.1), 0.05));
+  EXPECT_FALSE(groundToRow(roundCamera(0.3, 0.0), 0.0));  // under the lens: on the image plane
+  EXPECT_FALSE(groundToRow(roundCamera(0.3, 0.0), std::nan("")));
+}
+
+TEST(PlaceBand, CentresTheBandOnTheDistance) {
+  // 0.5 m up, level: 2.5 m ahead is row 340, the centre of rows [330, 351).
+  const BandPlacement band = placeBand(roundCamera(0.5, 0.0), BandConfig{2.5, 21}, 480);
+  EXPECT_EQ(band.row_begin, 330);
+  EXPECT_EQ(band.row_end, 351);
+  EXPECT_FALSE(band.clamped);
+  EXPECT_NEAR(band.distance_m, 2.5, 1e-9);
+  // An even row count: the centre 340 - 9.5 rounds to row 331 (centre 340.5, 2.4876 m).
+  const BandPlacement even = placeBand(roundCamera(0.5, 0.0), BandConfig{2.5, 20}, 480);
+  EXPECT_EQ(even.row_begin, 331);
+  EXPECT_NEAR(even.distance_m, 0.5 * 500.0 / 100.5, 1e-9);
+}
+
+TEST(PlaceBand, ClampsBelowTheHorizonWithMargin) {
+  // Level, 0.3 m up: 10 m ahead is 15 rows below the horizon, inside the 2 deg margin
+  // (500 tan 2 deg = 17.46 rows), so the band starts on row 258 and sees 0.3 * 500 / 27.5 m.
+  const BandPlacement band = placeBand(roundCamera(0.3, 0.0), BandConfig{10.0, 20}, 480);
+  EXPECT_TRUE(band.clamped);
+  EXPECT_EQ(band.row_begin, 258);
+  EXPECT_EQ(band.row_end, 278);
+  EXPECT_NEAR(band.distance_m, 0.3 * 500.0 / 27.5, 1e-9);
+  // Pitched 10 deg down, the horizon is 500 tan 10 deg = 88.2 rows above the centre.
+  const BandPlacement pitched = placeBand(roundCamera(0.3, 10.0), BandConfig{20.0, 20}, 480);
+  EXPECT_TRUE(pitched.clamped);
+  EXPECT_EQ(pitched.row_begin,
+            static_cast<int>(std::ceil(240.0 - 500.0 * std::tan(8.0 * CV_PI / 180.0))));
+}
+
+TEST(PlaceBand, ClampsToTheBottomWhenTheFloorIsNearerThanTheCameraSees) {
+  // Level, 0.2 m up: the nearest floor in view (row 479) is 0.2 * 500 / 239 = 0.42 m ahead.
+  const BandPlacement band = placeBand(roundCamera(0.2, 0.0), BandConfig{0.3, 20}, 480);
+  EXPECT_TRUE(band.clamped);
+  EXPECT_EQ(band.row_begin, 460);
+  EXPECT_EQ(band.row_end, 480);
+  EXPECT_NEAR(band.distance_m, 0.2 * 500.0 / 229.5, 1e-9);
+  // Behind the camera: the bottom too.
+  const BandPlacement behind = placeBand(roundCamera(0.3, 0.0, 0.1), BandConfig{0.05, 20}, 480);
+  EXPECT_TRUE(behind.clamped);
+  EXPECT_EQ(behind.row_begin, 460);
+}
+
+TEST(PlaceBand, BottomRowsWhenTheCameraSeesNoFloor) {
+  // 30 deg up: the horizon is below the image.
+  const BandPlacement band = placeBand(roundCamera(0.3, -30.0), BandConfig{0.46, 20}, 480);
+  EXPECT_TRUE(band.clamped);
+  EXPECT_EQ(band.row_begin, 460);
+  EXPECT_EQ(band.row_end, 480);
+  EXPECT_TRUE(std::isnan(band.distance_m));
+}
+
+TEST(LineDetector, PlacesTheBandForItsCamera) {
+  // Level, 0.5 m up: 2.5 m ahead is rows [330, 351).
+  LineDetectorConfig config;
+  config.band = {2.5, 21};
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 100, 10, 330, 351);
+  paintStripe(frame, 500, 10, 360, 380);  // the default camera's band
+  const LineMeasurement m = LineDetector(config, roundCamera(0.5, 0.0)).detect(frame);
+  EXPECT_EQ(m.band.row_begin, 330);
+  EXPECT_EQ(m.band.row_end, 351);
+  EXPECT_FALSE(m.band.clamped);
+  EXPECT_NEAR(m.band.centroid_x, 104.5, 1e-9);
 }
 
 TEST(LineDetector, FindsAStripeAtItsColumn) {
@@ -227,13 +352,14 @@ TEST(LineDetector, FewPixelsGiveACentroidButNotFound) {
 
 TEST(LineDetector, ClipsTheBandToSmallFrames) {
   LineDetector detector;
-  cv::Mat tiny(10, 12, CV_8UC3, kYellow);  // band rows [7, 27) clip to [7, 10)
+  cv::Mat tiny(10, 12, CV_8UC3, kYellow);  // shorter than the band: all its rows
   BandMeasurement band = detector.detect(tiny).band;
-  EXPECT_EQ(band.row_begin, 7);
+  EXPECT_EQ(band.row_begin, 0);
   EXPECT_EQ(band.row_end, 10);
-  EXPECT_EQ(band.pixel_count, 36);
+  EXPECT_TRUE(band.clamped);
+  EXPECT_EQ(band.pixel_count, 120);
   EXPECT_TRUE(band.found);
-  EXPECT_DOUBLE_EQ(band.centroid_y, 8.0);
+  EXPECT_DOUBLE_EQ(band.centroid_y, 4.5);
 
   cv::Mat one_pixel(1, 1, CV_8UC3, kYellow);
   band = detector.detect(one_pixel).band;
@@ -274,7 +400,8 @@ TEST(LineDetector, ReadsRegionsOfInterestWithTheirStride) {
 TEST(LineDetector, MeasuresTheLookAheadBandWhenEnabled) {
   LineDetectorConfig config;
   config.look_ahead_enabled = true;
-  config.look_ahead = {0.5, 10};  // rows [240, 250)
+  // Rows [240, 250): centred on row 244.5 of the default camera.
+  config.look_ahead = {pixelToGround(CameraGeometry(), 320.0, 244.5)->x, 10};
   cv::Mat frame = greyFrame();
   paintStripe(frame, 400, 10, 240, 250);
   paintStripe(frame, 300, 10, 360, 380);
@@ -369,8 +496,13 @@ TEST(LineDetector, ValidatesItsConfiguration) {
             "upper.v must be in [0, 255], got 256");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.lower.h = 40; }),
             "lower.h (40) must be <= upper.h (30); the box would match nothing");
-  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.band.top_fraction = 1.0; }),
-            "band.top_fraction must be in [0, 1), got 1");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.band.distance_m = 0.0; }),
+            "band.distance_m must be > 0, got 0");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) {
+              c.look_ahead_enabled = true;
+              c.look_ahead.distance_m = c.band.distance_m;
+            }),
+            "look_ahead.distance_m (0.46) must be beyond band.distance_m (0.46)");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.look_ahead.rows = 0; }),
             "look_ahead.rows must be in [1, 65536], got 0");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.min_pixels = 0; }),

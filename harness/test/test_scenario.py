@@ -14,6 +14,7 @@ from harness.scenario import (
     load_scenarios,
     metrics,
     parse_scenario,
+    scenario_world,
     stop_on_sight,
 )
 from harness.simulation import Perturbations, Simulation, with_line_gaps
@@ -46,6 +47,15 @@ def test_camera_transport_overrides_the_worlds():
     assert (s.camera_transport.name, s.camera_transport.jpeg_quality) == ("compressed", 80)
 
 
+def test_camera_mounting_moves_the_worlds_camera():
+    course = load_world(resolve_world_path("course")).camera
+    assert scenario_world(parse_scenario(MINIMAL)).camera == course
+    s = parse_scenario(with_(camera_mounting={"height_m": 0.5, "pitch_deg": 10}))
+    camera = scenario_world(s).camera
+    assert (camera.height_m, camera.pitch) == (0.5, math.radians(10.0))
+    assert (camera.x_offset_m, camera.K.tolist()) == (course.x_offset_m, course.K.tolist())
+
+
 def test_behaviour_launch_and_args():
     s = parse_scenario(
         with_(driver=None, behaviour={"launch": "follow_bot follower.launch", "args": {"a": 1}})
@@ -73,6 +83,8 @@ def test_behaviour_launch_and_args():
         (with_(criteria={"x": {"maximum": 1}}), "criteria.x.maximum: unknown field"),
         (with_(stop_when="never"), "stop_when: must be one of"),
         (with_(camera_transport={"transport": "h264"}), "camera_transport.transport: must be"),
+        (with_(camera_mounting={"pitch_deg": 90}), "camera_mounting.pitch_deg: must be < 89"),
+        (with_(camera_mounting={"roll_deg": 5}), "camera_mounting.roll_deg: unknown field"),
         ("just text", "must be a mapping"),
     ],
 )

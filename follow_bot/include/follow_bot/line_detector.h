@@ -3,7 +3,9 @@
 // The lecture does: cvtColor(BGR->HSV) on the whole frame, inRange, zero every row outside
 // [3h/4, 3h/4 + 20), cv::moments. This detector returns the same centroid but only reads the
 // band's pixels, and classifies each one in a single pass with the exact result of
-// cvtColor + inRange (see HsvBox), accumulating the moments on the fly.
+// cvtColor + inRange (see HsvBox), accumulating the moments on the fly. The band is placed by
+// ground distance for the camera's mounting (placeBand), so it looks at the same stretch of
+// floor on any robot; on the default mounting it is the lecture's [3h/4, 3h/4 + 20).
 #pragma once
 
 #include <algorithm>
@@ -15,6 +17,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/FollowerDefaults.h"
+#include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
 
@@ -88,11 +91,41 @@ class HsvBox {
   Screen screen_;
 };
 
-// A horizontal band of rows: [floor(top_fraction * height), that + rows), clipped to the image.
+// A horizontal band of image rows centred on the floor `distance_m` ahead of base_link (in the
+// image's centre column), `rows` tall. Its height stays in rows, not a depth of floor: the line's
+// width in pixels already shrinks with distance, and a fixed row count keeps the pixel count
+// (min_pixels) and the centroid's noise about the same wherever the band lands.
 struct BandConfig {
-  double top_fraction = FollowerDefaults::band_top_fraction;
+  double distance_m = FollowerDefaults::band_distance;
   int rows = FollowerDefaults::band_rows;
 };
+
+// The continuous image row (pixel centres at integers) where the floor point `distance_m` ahead
+// of base_link on its x axis appears: the inverse of pixelToGround at u = cx. Empty when that
+// point is not in front of the camera (on or behind its image plane) or the input is not finite.
+std::optional<double> groundToRow(const CameraGeometry& camera, double distance_m);
+
+// Where a band lands in a frame `image_height` rows tall.
+struct BandPlacement {
+  int row_begin = 0;  // rows [row_begin, row_end)
+  int row_end = 0;
+  // m ahead of base_link of the floor at the centre of the placed band (NaN when that row sees
+  // no floor: a camera that sees none).
+  double distance_m = 0.0;
+  // The requested distance is outside the floor the camera sees with margin, so the band was
+  // moved to the nearest rows that do: the bottom of the image (too near), or
+  // kMinDepressionDeg below the horizon (too far).
+  bool clamped = false;
+};
+
+// Rays less than this far below the horizon are not used: the floor there is too far away and
+// too foreshortened for a line to be measured.
+constexpr double kMinDepressionDeg = 2.0;
+
+// The band's rows for this camera: centred on groundToRow(band.distance_m), then clamped into
+// [first row at least kMinDepressionDeg below the horizon, image bottom]; a camera that sees no
+// such floor gets the bottom rows (clamped). A frame shorter than the band gets all its rows.
+BandPlacement placeBand(const CameraGeometry& camera, const BandConfig& band, int image_height);
 
 // Defaults: cfg/Follower.cfg's (FollowerDefaults, generated).
 struct LineDetectorConfig {
@@ -101,10 +134,10 @@ struct LineDetectorConfig {
   // it rejects dark, noisy pixels whose hue is meaningless.
   HsvColor lower{Defaults::h_min, Defaults::s_min, Defaults::v_min};
   HsvColor upper{Defaults::h_max, Defaults::s_max, Defaults::v_max};
-  BandConfig band;  // the lecture's band
-  // A second band higher in the image (further ahead) for anticipating curves.
+  BandConfig band;  // on the default mounting, the lecture's band
+  // A second band further ahead (higher in the image) for anticipating curves.
   bool look_ahead_enabled = Defaults::look_ahead;
-  BandConfig look_ahead{Defaults::look_ahead_top_fraction, Defaults::band_rows};
+  BandConfig look_ahead{Defaults::look_ahead_distance, Defaults::band_rows};
   // A band is `found` with at least this many line pixels. Measurements with fewer (but > 0)
   // pixels still carry a centroid, which is what the lecture uses.
   int min_pixels = Defaults::min_pixels;
@@ -133,6 +166,8 @@ struct BandMeasurement {
   double confidence = 0.0;
   int row_begin = 0;  // rows actually scanned: [row_begin, row_end)
   int row_end = 0;
+  double distance_m = 0.0;  // and the rest of the band's placeBand() result
+  bool clamped = false;
 };
 
 struct LineMeasurement {
@@ -146,9 +181,11 @@ struct LineMeasurement {
 
 class LineDetector {
  public:
-  // Throws std::invalid_argument with the validate() message when the configuration is unusable
-  // (and std::runtime_error in the HsvBox case above). Builds the HsvBox tables: ~2 ms.
-  explicit LineDetector(const LineDetectorConfig& config = LineDetectorConfig());
+  // `camera`: intrinsics and mounting, which place the bands (placeBand). Throws
+  // std::invalid_argument with the validate() message when the configuration or the camera is
+  // unusable (and std::runtime_error in the HsvBox case above). Builds the HsvBox tables: ~2 ms.
+  explicit LineDetector(const LineDetectorConfig& config = LineDetectorConfig(),
+                        const CameraGeometry& camera = CameraGeometry());
 
   // Measures the line in a CV_8UC3 BGR frame. Never throws: an empty or non-CV_8UC3 frame gives
   // a measurement with `error` set and nothing found. A frame shorter than the band is scanned
@@ -173,6 +210,7 @@ class LineDetector {
   bool drawDebug(cv::Mat& bgr, const LineMeasurement& measurement) const;
 
   const LineDetectorConfig& config() const { return config_; }
+  const CameraGeometry& camera() const { return camera_; }
 
  private:
   // The moments of a band's line pixels, divided by 255, and the rows that hold any.
@@ -196,6 +234,7 @@ class LineDetector {
   void fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const;
 
   LineDetectorConfig config_;
+  CameraGeometry camera_;
   HsvBox box_;
 };
 

@@ -95,7 +95,7 @@ struct PathConfig {
 };
 
 // Defaults suit a TurtleBot-class robot with a 640x480, 60 deg HFOV camera about 0.3 m up,
-// pitched down so the detector band (3/4 of the height) sees the floor 0.5-0.8 m ahead. There
+// pitched down 20 deg; the detector band sees the floor ~0.46 m ahead (band_distance). There
 // e = 1 (image edge) is a bearing of about 30 deg (0.5 rad) to the line, so kp = 1.5 turns at
 // ~3 rad/s per rad of bearing: a heading time constant of ~0.3 s, half the lecture's gain
 // (320 px / 100 = 3.2 rad/s per unit e), which oscillates at higher speeds.

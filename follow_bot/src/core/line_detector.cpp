@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -63,8 +64,8 @@ std::string checkColour(const char* name, const HsvColor& colour) {
 
 std::string checkBand(const char* name, const BandConfig& band) {
   std::ostringstream message;
-  if (!std::isfinite(band.top_fraction) || band.top_fraction < 0.0 || band.top_fraction >= 1.0) {
-    message << name << ".top_fraction must be in [0, 1), got " << band.top_fraction;
+  if (!(std::isfinite(band.distance_m) && band.distance_m > 0.0)) {
+    message << name << ".distance_m must be > 0, got " << band.distance_m;
   } else if (!inside(band.rows, 1, kMaxBandRows)) {
     message << name << ".rows must be in [1, " << kMaxBandRows << "], got " << band.rows;
   }
@@ -155,15 +156,12 @@ void visitCandidates(const HsvBox& box, const uchar* bgr_row, int cols, Visit&& 
   }
 }
 
-const LineDetectorConfig& validated(const LineDetectorConfig& config) {
-  const std::string error = validate(config);
-  if (!error.empty()) throw std::invalid_argument("LineDetector: " + error);
+const LineDetectorConfig& validated(const LineDetectorConfig& config,
+                                    const CameraGeometry& camera) {
+  for (const std::string& error : {validate(config), validate(camera)}) {
+    if (!error.empty()) throw std::invalid_argument("LineDetector: " + error);
+  }
   return config;
-}
-
-void bandRows(const BandConfig& band, int height, int* row_begin, int* row_end) {
-  *row_begin = std::min(static_cast<int>(std::floor(band.top_fraction * height)), height);
-  *row_end = std::min(*row_begin + band.rows, height);
 }
 
 void drawBand(cv::Mat& bgr, const BandMeasurement& band, const cv::Scalar& outline,
@@ -179,6 +177,43 @@ void drawBand(cv::Mat& bgr, const BandMeasurement& band, const cv::Scalar& outli
 }
 
 }  // namespace
+
+std::optional<double> groundToRow(const CameraGeometry& camera, double distance_m) {
+  // The floor point is `ahead` forward of the optical centre and height_m below it. In the
+  // optical frame (see pixelToGround) its depth is ahead cos p + h sin p and its downward
+  // coordinate h cos p - ahead sin p; the row is cy + fy * down / depth.
+  const double ahead = distance_m - camera.x_offset_m;
+  const double sin_p = std::sin(camera.pitch_rad);
+  const double cos_p = std::cos(camera.pitch_rad);
+  const double depth = ahead * cos_p + camera.height_m * sin_p;
+  if (!(depth > 0.0)) return std::nullopt;  // also rejects NaN
+  const double row = camera.cy + camera.fy * (camera.height_m * cos_p - ahead * sin_p) / depth;
+  if (!std::isfinite(row)) return std::nullopt;
+  return row;
+}
+
+BandPlacement placeBand(const CameraGeometry& camera, const BandConfig& band, int image_height) {
+  BandPlacement placement;
+  const double half = (band.rows - 1) / 2.0;  // centre row - first row
+  // Rows the band may start on: from the first one kMinDepressionDeg below the horizon (an
+  // angle above the optical axis when the pitch exceeds it) to the bottom of the image.
+  constexpr double kNever = std::numeric_limits<double>::infinity();
+  const double margin_below_axis = kMinDepressionDeg * CV_PI / 180.0 - camera.pitch_rad;
+  const double highest = margin_below_axis < CV_PI / 2
+                             ? std::ceil(camera.cy + camera.fy * std::tan(margin_below_axis))
+                             : kNever;
+  const double lowest = std::max(0, image_height - band.rows);
+  // No row: the point is under or behind the camera, nearer than any floor it sees.
+  const std::optional<double> centre = groundToRow(camera, band.distance_m);
+  const double wanted = centre ? std::round(*centre - half) : kNever;
+  const double begin = std::max(std::min(std::max(wanted, highest), lowest), 0.0);
+  placement.clamped = begin != wanted;
+  placement.row_begin = static_cast<int>(begin);
+  placement.row_end = std::min(placement.row_begin + band.rows, image_height);
+  const std::optional<cv::Point2d> floor = pixelToGround(camera, camera.cx, begin + half);
+  placement.distance_m = floor ? floor->x : std::nan("");
+  return placement;
+}
 
 HsvBox::HsvBox(const HsvColor& lower, const HsvColor& upper) {
   // Appends x, visited in increasing order, to runs[0..max_runs): extends the last run when x
@@ -264,7 +299,10 @@ std::string validate(const LineDetectorConfig& config) {
       return message.str();
     }
   }
-  if (config.min_pixels < 1) {
+  if (config.look_ahead_enabled && !(config.look_ahead.distance_m > config.band.distance_m)) {
+    message << "look_ahead.distance_m (" << config.look_ahead.distance_m
+            << ") must be beyond band.distance_m (" << config.band.distance_m << ")";
+  } else if (config.min_pixels < 1) {
     message << "min_pixels must be >= 1, got " << config.min_pixels;
   } else if (!std::isfinite(config.max_width_fraction) || config.max_width_fraction <= 0.0 ||
              config.max_width_fraction > 1.0) {
@@ -273,8 +311,8 @@ std::string validate(const LineDetectorConfig& config) {
   return message.str();
 }
 
-LineDetector::LineDetector(const LineDetectorConfig& config)
-    : config_(validated(config)), box_(config.lower, config.upper) {}
+LineDetector::LineDetector(const LineDetectorConfig& config, const CameraGeometry& camera)
+    : config_(validated(config, camera)), camera_(camera), box_(config.lower, config.upper) {}
 
 LineMeasurement LineDetector::detect(const cv::Mat& bgr) const {
   return detect(bgr, LineMeasurement());
@@ -301,7 +339,11 @@ LineMeasurement LineDetector::detect(const cv::Mat& bgr, const LineMeasurement& 
 BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& band,
                                           std::optional<double> expected_x) const {
   BandMeasurement result;
-  bandRows(band, bgr.rows, &result.row_begin, &result.row_end);
+  const BandPlacement placement = placeBand(camera_, band, bgr.rows);
+  result.row_begin = placement.row_begin;
+  result.row_end = placement.row_end;
+  result.distance_m = placement.distance_m;
+  result.clamped = placement.clamped;
   const int band_rows = result.row_end - result.row_begin;
 
   // The band's mask, kept only when a blob may have to be picked out of it.
@@ -388,9 +430,8 @@ cv::Mat LineDetector::debugMask(const cv::Mat& bgr) const {
   if (!checkFrame(bgr).empty()) return cv::Mat();
   cv::Mat mask(bgr.size(), CV_8UC1, cv::Scalar::all(0));
   auto mark_band = [&](const BandConfig& band) {
-    int row_begin, row_end;
-    bandRows(band, bgr.rows, &row_begin, &row_end);
-    for (int y = row_begin; y < row_end; ++y) {
+    const BandPlacement placement = placeBand(camera_, band, bgr.rows);
+    for (int y = placement.row_begin; y < placement.row_end; ++y) {
       uchar* mask_row = mask.ptr<uchar>(y);
       visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) { mask_row[x] = is_line ? 255 : 0; });

@@ -36,9 +36,9 @@ Settings coreSettings(const FollowerConfig& cfg) {
   LineDetectorConfig& detector = settings.detector;
   detector.lower = {cfg.h_min, cfg.s_min, cfg.v_min};
   detector.upper = {cfg.h_max, cfg.s_max, cfg.v_max};
-  detector.band = {cfg.band_top_fraction, cfg.band_rows};
+  detector.band = {cfg.band_distance, cfg.band_rows};
   detector.look_ahead_enabled = cfg.look_ahead;
-  detector.look_ahead = {cfg.look_ahead_top_fraction, cfg.band_rows};
+  detector.look_ahead = {cfg.look_ahead_distance, cfg.band_rows};
   detector.min_pixels = cfg.min_pixels;
 
   SteeringConfig& steering = settings.steering;
@@ -82,11 +82,12 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
     status_pub_ = pnh.advertise<LineStatus>("line", 1);
   }
 
-  // New settings, or new intrinsics (path mode's ground geometry), start with fresh controller
-  // state (a new law must not inherit the old one's).
+  // New settings, or new intrinsics (path mode's ground geometry and where the bands land), start
+  // with fresh controller state (a new law must not inherit the old one's).
   void configure(const FollowerConfig& config) override {
     settings_ = coreSettings(config);
-    detector_ = std::make_unique<LineDetector>(settings_.detector);
+    detector_ = std::make_unique<LineDetector>(settings_.detector, camera());
+    placement_reported_ = false;
     // Until camera_info arrives path mode steers with pd.
     law_ = makeSteeringLaw(settings_.steering,
                            hasIntrinsics() ? std::optional(camera()) : std::nullopt);
@@ -108,9 +109,32 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
 
   LineState state() const { return law_->state(); }
 
+  // Once per configuration: which floor the bands look at on this camera, and loudly when a
+  // distance asked for is outside what it sees.
+  void reportPlacement(const BandMeasurement& band, const char* name, double wanted_m) {
+    if (band.clamped) {
+      NODELET_WARN(
+          "%s: %.2f m ahead is outside the floor this camera sees (%.2f m up, pitched "
+          "%.1f deg down); rows [%d, %d) instead, %.2f m ahead",
+          name, wanted_m, camera().height_m, camera().pitch_rad * 180.0 / CV_PI, band.row_begin,
+          band.row_end, band.distance_m);
+    } else {
+      NODELET_INFO("%s: rows [%d, %d), %.2f m ahead", name, band.row_begin, band.row_end,
+                   band.distance_m);
+    }
+  }
+
   Decision step(const Frame& frame) override {
     // The last sighting keeps the band on the line it followed (see LineDetector::detect).
     seen_ = detector_->detect(frame.image, seen_);
+    if (!placement_reported_) {
+      placement_reported_ = true;
+      reportPlacement(seen_.band, "~band_distance", settings_.detector.band.distance_m);
+      if (settings_.detector.look_ahead_enabled) {
+        reportPlacement(seen_.look_ahead, "~look_ahead_distance",
+                        settings_.detector.look_ahead.distance_m);
+      }
+    }
     const Twist2D desired = steer(seen_, frame.time);
     if (!seen_.band.found)
       NODELET_WARN_THROTTLE(2.0, "no line in the band (%s)", toString(state()));
@@ -141,6 +165,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   std::unique_ptr<SteeringLaw> law_;
   Settings settings_;
   LineMeasurement seen_;  // the last frame's
+  bool placement_reported_ = false;
   Twist2D last_command_;  // what the robot was told to do since the previous frame
   bool use_odom_ = false;
   bool has_odom_ = false;

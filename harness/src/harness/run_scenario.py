@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import fnmatch
 import json
+import math
 import os
 import signal
 import socket
@@ -33,6 +34,7 @@ import numpy as np
 import yaml
 from tqdm import tqdm
 
+from harness.camera import Camera
 from harness.contact_sheet import DEFAULT_FRAMES, write_contact_sheet
 from harness.plot import plot_run
 from harness.report import format_value, headline, write_summary
@@ -43,8 +45,9 @@ from harness.scenario import (
     find_object,
     load_scenarios,
     metrics,
+    scenario_world,
 )
-from harness.world import WorldError, load_world
+from harness.world import WorldError
 
 MASTER_START_TIMEOUT = 20.0  # wall s
 MASTER_START_ATTEMPTS = 3  # a port another program takes between our probe and roscore's bind
@@ -131,10 +134,16 @@ def behaviour_command(scenario: Scenario) -> list[str]:
     return launch + [f"{k}:={v}" for k, v in args.items()]
 
 
-def description_command(scenario: Scenario) -> list[str]:
-    """robot_state_publisher with the URDF of the world's camera mounting: tf as on the robot."""
-    return ["roslaunch", "--wait", "follow_bot", "robot_description.launch",
-            f"world:={scenario.world_path}"]  # fmt: skip
+def description_command(camera: Camera) -> list[str]:
+    """robot_state_publisher with the URDF of the run's camera mounting (robot_description.launch's
+    arguments): tf as on the robot, the only place the node under test learns its mounting."""
+    mounting = {
+        "camera_height": camera.height_m,
+        "camera_pitch_deg": round(math.degrees(camera.pitch), 9),
+        "camera_x_offset": camera.x_offset_m,
+    }
+    launch = ["roslaunch", "--wait", "follow_bot", "robot_description.launch"]
+    return launch + [f"{k}:={v}" for k, v in mounting.items()]
 
 
 def show_progress(scenario: Scenario, env: dict, processes: list[subprocess.Popen]) -> None:
@@ -172,7 +181,7 @@ def run_one(
     result.json. `progress`: show the run's sim time on stderr while it plays; `sheet` > 0: also
     a contact sheet of that many frames (from the camera video, recorded for it)."""
     out.mkdir(parents=True, exist_ok=True)
-    world = load_world(scenario.world_path)
+    world = scenario_world(scenario)  # with the scenario's camera mounting
     ros_home = out / "ros_home"
     env = dict(os.environ, ROS_IP="127.0.0.1", ROS_HOME=str(ros_home))
     env["ROS_LOG_DIR"] = str(ros_home / "log")
@@ -205,7 +214,7 @@ def run_one(
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
             # The description's start-up (roslaunch, the URDF script) done before the run's:
             # its load must not slow the first lockstep frames.
-            description = start(description_command(scenario))
+            description = start(description_command(world.camera))
             if not wait_for_node(port, "/robot_state_publisher", 60.0, description):
                 raise RuntimeError(f"robot_state_publisher did not start (see {out}/ros.log)")
             start(behaviour_command(scenario))

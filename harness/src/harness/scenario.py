@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from harness import scoring
+from harness.camera import Camera
 from harness.realism import parse_realism
 from harness.simulation import Perturbations
 from harness.sweep import draw, member_name, parse_sweep
@@ -119,6 +120,32 @@ class Criterion:
 
 
 @dataclass(frozen=True)
+class CameraMounting:
+    """Where a scenario mounts the world's camera on the robot; None keeps the world's."""
+
+    height_m: float | None = None  # optical centre above the floor
+    pitch_deg: float | None = None  # tilt of the optical axis, positive looks down
+    x_offset_m: float | None = None  # optical centre forward of the base origin
+
+    def apply(self, camera: Camera) -> Camera:
+        return replace(
+            camera,
+            height_m=camera.height_m if self.height_m is None else self.height_m,
+            pitch=camera.pitch if self.pitch_deg is None else math.radians(self.pitch_deg),
+            x_offset_m=camera.x_offset_m if self.x_offset_m is None else self.x_offset_m,
+        )
+
+
+def _parse_camera_mounting(value: Any, where: str) -> CameraMounting:
+    f = Fields(value, where, {"height_m", "pitch_deg", "x_offset_m"})
+    return CameraMounting(
+        height_m=f.get("height_m", number(gt=0.0), None),
+        pitch_deg=f.get("pitch_deg", number(gt=-89.0, lt=89.0), None),
+        x_offset_m=f.get("x_offset_m", number(), None),
+    )
+
+
+@dataclass(frozen=True)
 class Scenario:
     name: str
     world_path: Path
@@ -138,6 +165,7 @@ class Scenario:
     criteria: tuple[Criterion, ...]
     seed: int | None = None  # seeds the pixel noise (None: the world's noise seed)
     camera_transport: CameraTransport | None = None  # None: the world's
+    camera_mounting: CameraMounting = field(default_factory=CameraMounting)  # over the world's
     source: Path | None = None
     spec: dict = field(default_factory=dict, compare=False)  # the run's own fields, as parsed
     parameters: dict = field(default_factory=dict, compare=False)  # a sweep member's draws
@@ -272,7 +300,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
     allowed = {
         "name", "world", "start", "behaviour", "driver", "rate_hz", "duration", "stop_when",
         "lockstep", "reply_timeout", "perturbations", "target", "watch", "goal", "standoff",
-        "criteria", "seed", "camera_transport",
+        "criteria", "seed", "camera_transport", "camera_mounting",
     }  # fmt: skip
     try:
         f = Fields(data, "", allowed)
@@ -321,12 +349,21 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             criteria=tuple(criteria.values()),
             seed=seed,
             camera_transport=f.get("camera_transport", parse_camera_transport, None),
+            camera_mounting=f.section("camera_mounting", _parse_camera_mounting),
             source=source,
             spec={**data, "name": name, "world": str(world_path)},
         )
     except (ValidationError, WorldError) as error:
         where = f"{source}: " if source else ""
         raise ScenarioError(f"{where}{error}") from None
+
+
+def scenario_world(scenario: Scenario) -> World:
+    """The world the run plays: the scenario's world file, its camera moved to the scenario's
+    `camera_mounting` (the simulator's camera, the robot description and the node's mounting
+    all come from this one)."""
+    world = load_world(scenario.world_path)
+    return replace(world, camera=scenario.camera_mounting.apply(world.camera))
 
 
 def merged(under: dict, over: dict) -> dict:

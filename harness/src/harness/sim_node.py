@@ -47,7 +47,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from follow_bot_msgs.msg import BehaviourStatus
 from harness.debug_video import DebugView
 from harness.ros_image import bgr_to_jpeg_msg, bgr_to_msg
-from harness.scenario import ScenarioError, load_scenario
+from harness.scenario import ScenarioError, load_scenario, scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
 from harness.world import WorldError, load_world, resolve_world_path
@@ -131,7 +131,7 @@ class SimNode:
         scenario_path = rospy.get_param("~scenario", "")
         if scenario_path:
             scenario = load_scenario(scenario_path)
-            world = load_world(scenario.world_path)
+            world = scenario_world(scenario)
             transport = scenario.camera_transport or world.camera_transport
             self.rate_hz, self.duration = scenario.rate_hz, scenario.duration
             self.lockstep, self.reply_timeout = scenario.lockstep, scenario.reply_timeout
