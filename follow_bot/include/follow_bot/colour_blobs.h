@@ -93,6 +93,9 @@ class ColourBlobDetector {
 
   const ColourBlobConfig& config() const { return config_; }
 
+  // Draws each found blob of `blobs` on `bgr`: its contour, enclosing circle and name.
+  static void drawDebug(cv::Mat& bgr, const BlobResult& blobs);
+
  private:
   void cleanedMask(const cv::Mat& hsv, const ColourSpec& spec, cv::Mat& mask) const;
 
