@@ -20,7 +20,7 @@ lab.start("line_follower", __doc__, {
     "max_linear": "top speed, m/s (0.3)", "kp": "rad/s per unit of normalised error (1.5)",
     "kd": "rad/s per unit of error per s (0: P control)",
     "band_top_fraction": "crop: first row, as a fraction of the height (0.75)",
-    "watchdog_timeout": "s without a frame before one zero Twist (0.15)",
+    "watchdog_timeout": f"s without a frame before one zero Twist ({core.WATCHDOG_TIMEOUT})",
     "camera_height": "path: optical centre above the floor, m (default: the C++ nodes' one)",
     "camera_pitch_deg": "path: camera pitch, deg, down positive (default: the C++ nodes' one)",
     "camera_x_offset": "path: optical centre forward of base_link, m (default: the C++ nodes' one)",
