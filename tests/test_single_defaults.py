@@ -29,6 +29,44 @@ GENERATED = {
     "follow_bot/cfg/Parker.cfg": ["follow_bot/include/follow_bot/parking_servo.h"],
     "follow_bot/cfg/Panorama.cfg": ["follow_bot/include/follow_bot/panorama_capture.h"],
 }
+# Core fields that hold a .cfg parameter under another name (or type): header -> field -> the
+# <Name>Defaults member its initialiser must name.
+RENAMED = {
+    "follow_bot/include/follow_bot/colour_blobs.h": {
+        "sensitivity": "BeaconChaserDefaults::sensitivity",
+        "s_min": "BeaconChaserDefaults::s_min",
+        "v_min": "BeaconChaserDefaults::v_min",
+    },
+    "follow_bot/include/follow_bot/steering_law.h": {"mode": "FollowerDefaults::mode"},
+    "follow_bot/include/follow_bot/tag_detector.h": {
+        "family": "ParkerDefaults::tag_family",
+        "id": "ParkerDefaults::tag_id",
+        "size_m": "ParkerDefaults::tag_size",
+        "quad_decimate": "ParkerDefaults::quad_decimate",
+        "min_decision_margin": "ParkerDefaults::min_decision_margin",
+        "max_hamming": "ParkerDefaults::max_hamming",
+    },
+    "follow_bot/include/follow_bot/sign_detector.h": {
+        "image_path": "ParkerDefaults::sign_image",
+        "width_m": "ParkerDefaults::sign_width",
+    },
+    "image_converter/include/image_converter/overlay.h": {
+        "radius_px": "ImageConverterDefaults::circle_radius",
+        "thickness_px": "ImageConverterDefaults::circle_thickness",
+    },
+    "follow_bot_common/include/follow_bot_common/velocity_limiter.h": {
+        "max_linear": "CommandOutputDefaults::limit_linear",
+        "max_angular": "CommandOutputDefaults::limit_angular",
+        "max_linear_accel": "CommandOutputDefaults::limit_linear_accel",
+        "max_angular_accel": "CommandOutputDefaults::limit_angular_accel",
+    },
+}
+# A ~param read with a fallback in C++ (param, checkedParam, positiveParam) or Python
+# (rospy.get_param): its name and the fallback's text.
+PARAM_FALLBACK = re.compile(
+    r"""(?:[pP]aram(?:<[\w:]+>)?|get_param)\(\s*(?:\w+,\s*)?"~?(\w+)",\s*([^,)]+)"""
+)
+
 CONFIG_STRUCT = re.compile(r"^struct \w*Config \{\n(.*?)^\};", re.M | re.S)
 LITERAL_INITIALISER = re.compile(
     r"^\s*(?:double|float|int|bool|std::string)\s+(\w+)\s*=\s*"
@@ -91,3 +129,32 @@ def test_generated_cores_hold_no_literal_defaults(cfg):
             m for body in CONFIG_STRUCT.findall(text) for m in LITERAL_INITIALISER.findall(body)
         ]
         assert [m for m in members if m in names] == [], header
+
+
+@pytest.mark.parametrize("header", sorted(RENAMED))
+def test_renamed_core_fields_take_the_generated_default(header):
+    """A core field holding a .cfg parameter under another name is initialised from the
+    generated header, e.g. `double width_m = ParkerDefaults::sign_width;`."""
+    text = (REPO / header).read_text()
+    for field, default in RENAMED[header].items():
+        initialiser = re.search(rf"^\s*[\w:<>]+\s+{field}\s*=\s*([^;]+);", text, re.M)
+        assert initialiser, f"{header}: no initialiser of {field}"
+        assert default in initialiser[1], f"{header}: {field} = {initialiser[1]}"
+
+
+def test_code_reads_no_cfg_parameter_with_a_literal_fallback():
+    """Reading a .cfg parameter with a literal fallback (`positiveParam(pnh, "watchdog_timeout",
+    0.15)`, `rospy.get_param("~watchdog_timeout", 0.15)`) writes its default a second time."""
+    known = defaults()
+    sources = [
+        path
+        for pattern in ("*/src/**/*.cpp", "*/include/**/*.h", "*/python/**/*.py", "*/scripts/*.py")
+        for path in REPO.glob(pattern)
+    ]
+    repeats = [
+        f"{path.relative_to(REPO)}: {name} = {fallback.strip()}"
+        for path in sorted(sources)
+        for name, fallback in PARAM_FALLBACK.findall(path.read_text())
+        if name in known and any(same(fallback.strip().strip('"'), d) for d in known[name])
+    ]
+    assert repeats == []

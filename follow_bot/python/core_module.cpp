@@ -88,6 +88,8 @@ void bindWatchdog(py::module_& m) {
       .def("reset", &FrameWatchdog::reset)
       .def_property_readonly("timeout", &FrameWatchdog::timeout)
       .def_property_readonly("last_frame", &FrameWatchdog::lastFrame);
+  // CommandOutput's ~watchdog_timeout default (follow_bot_common/cfg/CommandOutput.cfg), s.
+  m.attr("WATCHDOG_TIMEOUT") = follow_bot_common::CommandOutputDefaults::watchdog_timeout;
 }
 
 void bindLineDetector(py::module_& m) {

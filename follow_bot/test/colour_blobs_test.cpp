@@ -228,7 +228,8 @@ TEST(ColourBlobDetector, SaturationAndValueFloorsRejectGreyAndDark) {
   const ColourBlobDetector detector;
   cv::Mat frame = greyFrame();
   drawDisk(frame, {200.0, 240.0}, 40.0, bgrFromHsv(60, 80, 200));  // washed-out green
-  drawDisk(frame, {450.0, 240.0}, 40.0, bgrFromHsv(60, 255, 30));  // nearly black green
+  // Nearly black green, below the default value floor (BeaconChaser.cfg's v_min).
+  drawDisk(frame, {450.0, 240.0}, 40.0, bgrFromHsv(60, 255, ColourSpec().v_min - 10));
   EXPECT_FALSE(blobOf(detector.detect(frame), "green").found);
 }
 

@@ -44,3 +44,37 @@ function(generate_cfg_defaults)
   add_custom_target(${PROJECT_NAME}_cfg_defaults ALL DEPENDS ${headers})
   install(FILES ${headers} DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION})
 endfunction()
+
+# add_python_core(SOURCE): the calling package's Python module <package>.core,
+# pybind11 bindings (SOURCE) over its <package>_core library, built into the devel space's
+# Python path next to the package catkin_python_setup() makes (python/<package>, ../setup.py),
+# so `from <package> import core` works after sourcing devel/ or install/; installed. Also the
+# executable core_reference (target <package>_core_reference, from core_reference.cpp): the C++ results
+# tests/test_python_core.py compares the module's with, on the same image files.
+# The interpreter catkin builds for (the Makefile passes /usr/bin/python3), with its headers
+# (python3-dev). Found as Python3: a dependency's CMake (ament_cmake_core's python.cmake) already
+# runs find_package(Python3), which puts Debian's pybind11 in its FindPython mode anyway.
+function(add_python_core SOURCE)
+  set(Python3_EXECUTABLE ${PYTHON_EXECUTABLE})
+  find_package(Python3 REQUIRED COMPONENTS Interpreter Development.Module)
+  find_package(pybind11 2.6 CONFIG REQUIRED)
+  # A workspace-unique target name; Python sees the file as <package>/core.<SOABI>.so. What
+  # pybind11_add_module does, spelt out so catkin_lint can follow the target.
+  add_library(${PROJECT_NAME}_python_core MODULE ${SOURCE})
+  pybind11_extension(${PROJECT_NAME}_python_core)  # the module's file name
+  target_link_libraries(${PROJECT_NAME}_python_core PRIVATE pybind11::module ${PROJECT_NAME}_core
+    ${OpenCV_LIBRARIES})
+  target_compile_options(${PROJECT_NAME}_python_core PRIVATE -Wall -Wextra -Werror)
+  set_target_properties(${PROJECT_NAME}_python_core PROPERTIES
+    OUTPUT_NAME core
+    CXX_VISIBILITY_PRESET hidden  # as pybind11 requires of a module
+    LIBRARY_OUTPUT_DIRECTORY ${CATKIN_DEVEL_PREFIX}/${CATKIN_PACKAGE_PYTHON_DESTINATION})
+  install(TARGETS ${PROJECT_NAME}_python_core
+    LIBRARY DESTINATION ${CATKIN_PACKAGE_PYTHON_DESTINATION})
+
+  add_executable(${PROJECT_NAME}_core_reference core_reference.cpp)
+  set_target_properties(${PROJECT_NAME}_core_reference PROPERTIES OUTPUT_NAME core_reference)
+  target_link_libraries(${PROJECT_NAME}_core_reference ${PROJECT_NAME}_core ${OpenCV_LIBRARIES})
+  target_compile_options(${PROJECT_NAME}_core_reference PRIVATE -Wall -Wextra -Werror)
+  install(TARGETS ${PROJECT_NAME}_core_reference RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
+endfunction()

@@ -18,12 +18,12 @@ namespace follow_bot {
 // around the hue circle, so red (centre 0) takes 0..s and 180 - s..179.
 struct ColourSpec {
   std::string name;
-  int hue_centre = 0;    // 0..179
-  int sensitivity = 15;  // 0..90; 90 accepts every hue
+  int hue_centre = 0;                                   // 0..179
+  int sensitivity = BeaconChaserDefaults::sensitivity;  // 0..90; 90 accepts every hue
   // Grey floor and white walls have S near 0 and lose their hue to noise; S >= 100 rejects
-  // them. The floor V (40) keeps the shaded faces of the dark-green dumpster (V ~ 70).
-  int s_min = 100;  // 0..255
-  int v_min = 40;   // 0..255
+  // them. The floor V (20) keeps the shaded faces of the dark-green dumpster (V ~ 70).
+  int s_min = BeaconChaserDefaults::s_min;  // 0..255
+  int v_min = BeaconChaserDefaults::v_min;  // 0..255
 };
 
 // The default spec of "red" (hue 0), "green" (60) or "blue" (120); nullopt for other names.
@@ -92,6 +92,9 @@ class ColourBlobDetector {
   cv::Mat mask(const cv::Mat& bgr, const std::string& name) const;
 
   const ColourBlobConfig& config() const { return config_; }
+
+  // Draws each found blob of `blobs` on `bgr`: its contour, enclosing circle and name.
+  static void drawDebug(cv::Mat& bgr, const BlobResult& blobs);
 
  private:
   void cleanedMask(const cv::Mat& hsv, const ColourSpec& spec, cv::Mat& mask) const;

@@ -34,4 +34,8 @@ class MarkerDetector {
                                                   const CameraGeometry& camera) = 0;
 };
 
+// Draws `marker` on `bgr`: its outline, its axes projected with `camera`'s intrinsics (x red,
+// y green, z blue, each half the marker's width) and its id.
+void drawMarker(cv::Mat& bgr, const MarkerObservation& marker, const CameraGeometry& camera);
+
 }  // namespace follow_bot

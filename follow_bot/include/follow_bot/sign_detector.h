@@ -20,15 +20,18 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
 
 namespace follow_bot {
 
 struct SignDetectorConfig {
-  std::string image_path;  // reference picture of the sign's face, read as grey levels
-  double width_m = 0.0;    // physical width of that picture; its height follows the aspect ratio
-  double ratio = 0.75;     // Lowe's ratio: best match distance / second best must be below it
-  int min_inliers = 15;    // RANSAC inliers needed to accept a detection
+  // Reference picture of the sign's face, read as grey levels (the parker's ~sign_image).
+  std::string image_path = ParkerDefaults::sign_image;
+  // Physical width of that picture (~sign_width); its height follows the aspect ratio.
+  double width_m = ParkerDefaults::sign_width;
+  double ratio = 0.75;   // Lowe's ratio: best match distance / second best must be below it
+  int min_inliers = 15;  // RANSAC inliers needed to accept a detection
   double ransac_threshold_px = 3.0;        // reprojection distance that makes a RANSAC inlier
   int max_reference_features = 3000;       // strongest reference keypoints kept (0 = all)
   int min_reference_features = 50;         // fewer makes the reference featureless: startup error

@@ -100,7 +100,7 @@ struct PathConfig {
 // ~3 rad/s per rad of bearing: a heading time constant of ~0.3 s, half the lecture's gain
 // (320 px / 100 = 3.2 rad/s per unit e), which oscillates at higher speeds.
 struct SteeringConfig {
-  SteeringMode mode = SteeringMode::kPD;
+  SteeringMode mode = *parseSteeringMode(FollowerDefaults::mode);
 
   // Limits of pd and path (the lecture's law has the lecture's constants). path slows below
   // max_linear (not below min_linear) so that its arc needs at most max_angular.

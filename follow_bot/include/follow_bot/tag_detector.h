@@ -19,17 +19,21 @@
 #include <optional>
 #include <string>
 
+#include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
 
 namespace follow_bot {
 
 struct TagDetectorConfig {
-  std::string family = "tag36h11";  // tag36h11, tag25h9, tag16h5, tagStandard41h12, ...
-  int id = 0;                       // only this id is accepted
-  double size_m = 0.30;             // edge of the black square, metres
-  double quad_decimate = 2.0;       // quad search on a 1/decimate image; corners refined at full
-  double min_decision_margin = 30;  // below this a decode is treated as a false positive
-  int max_hamming = 0;              // corrected bits accepted (0: exact codes only)
+  // The parker's ~tag_* defaults (cfg/Parker.cfg).
+  std::string family = ParkerDefaults::tag_family;  // tag36h11, tag25h9, tag16h5, ...
+  int id = ParkerDefaults::tag_id;                  // only this id is accepted
+  double size_m = ParkerDefaults::tag_size;         // edge of the black square, metres
+  // Quad search on a 1/decimate image; corners refined at full resolution.
+  double quad_decimate = ParkerDefaults::quad_decimate;
+  // Below this a decode is treated as a false positive.
+  double min_decision_margin = ParkerDefaults::min_decision_margin;
+  int max_hamming = ParkerDefaults::max_hamming;  // corrected bits accepted (0: exact codes only)
   // The two pose solutions count as equally good (keep the previous frame's branch) when their
   // reprojection residuals are within this ratio, or both below ambiguity_px (corner noise).
   double ambiguity_ratio = 1.5;

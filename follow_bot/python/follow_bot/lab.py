@@ -84,7 +84,7 @@ class CommandOutput:
 
     def __init__(self, allow_reverse=False):
         self.limiter = core.VelocityLimiter(core.VelocityLimiterConfig(allow_reverse=allow_reverse))
-        timeout = rospy.get_param("~watchdog_timeout", 0.15)
+        timeout = rospy.get_param("~watchdog_timeout", core.WATCHDOG_TIMEOUT)
         try:
             self.watchdog = core.FrameWatchdog(timeout)
         except ValueError as error:

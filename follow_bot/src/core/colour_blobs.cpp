@@ -198,4 +198,16 @@ cv::Mat ColourBlobDetector::mask(const cv::Mat& bgr, const std::string& name) co
   return cv::Mat();
 }
 
+void ColourBlobDetector::drawDebug(cv::Mat& bgr, const BlobResult& blobs) {
+  for (const ColourBlob& blob : blobs.colours) {
+    if (!blob.found) continue;
+    cv::drawContours(bgr, std::vector<std::vector<cv::Point>>{blob.contour}, 0,
+                     cv::Scalar(255, 255, 255), 2);
+    cv::circle(bgr, blob.circle_centre, static_cast<int>(blob.circle_radius),
+               cv::Scalar(0, 255, 255), 1);
+    cv::putText(bgr, blob.name, blob.bounding_box.tl() - cv::Point(0, 5), cv::FONT_HERSHEY_SIMPLEX,
+                0.6, cv::Scalar(255, 255, 255), 2);
+  }
+}
+
 }  // namespace follow_bot

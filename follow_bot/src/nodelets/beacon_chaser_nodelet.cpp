@@ -5,102 +5,20 @@
 // Thin wiring around ColourBlobDetector and BeaconController; BehaviourNodelet adds the camera
 // topics, frame checks, limits, the frame watchdog and the final stop. Thresholds and gains are
 // ~params, also live through dynamic_reconfigure (cfg/BeaconChaser.cfg).
-#include <limits>
 #include <memory>
-#include <optional>
-#include <stdexcept>
-#include <string>
 #include <vector>
 
 #include <std_msgs/Bool.h>
-#include <opencv2/imgproc.hpp>
 
 #include "follow_bot/BeaconChaserConfig.h"
-#include "follow_bot/BeaconDetections.h"
-#include "follow_bot/beacon_controller.h"
-#include "follow_bot/colour_blobs.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
+#include "messages.h"
+#include "settings.h"
 
 namespace follow_bot {
 
 namespace {
-
-// Everything dynamic_reconfigure can change, as core configurations.
-struct Settings {
-  ColourBlobConfig detector;
-  BeaconControllerConfig controller;
-};
-
-// "~name must be red, green or blue, got 'x'" unless `colour` names a detectable colour.
-void requireColourName(const std::string& name, const std::string& colour) {
-  if (!parseColourName(colour)) {  // checked in every mode: a typo is a typo
-    throw std::invalid_argument("~" + name + " must be red, green or blue, got '" + colour + "'");
-  }
-}
-
-// The core configurations for `cfg`, on top of `base` for what only start-up sets (target
-// object, camera). Throws std::invalid_argument naming the first bad value; used for the ~params
-// at start-up and for every reconfiguration, so both are held to the same rules. Ranges are the
-// .cfg's: readConfig checks them at start-up, the dynamic_reconfigure server clamps live updates.
-Settings coreSettings(const BeaconChaserConfig& cfg, const BeaconControllerConfig& base) {
-  Settings settings;
-  ColourBlobConfig& detector = settings.detector;
-  for (ColourSpec& colour : detector.colours) {
-    colour.sensitivity = cfg.sensitivity;
-    colour.s_min = cfg.s_min;
-    colour.v_min = cfg.v_min;
-  }
-  detector.min_area = cfg.min_area;
-  if (const std::string error = validate(detector); !error.empty()) {
-    throw std::invalid_argument(error);
-  }
-
-  BeaconControllerConfig& controller = settings.controller;
-  controller = base;
-  const std::optional<BeaconMode> mode = parseBeaconMode(cfg.mode);
-  if (!mode) {
-    throw std::invalid_argument("~mode must be 'follow_green_stop_red' or 'approach', got '" +
-                                cfg.mode + "'");
-  }
-  controller.mode = *mode;
-  requireColourName("follow_colour", cfg.follow_colour);
-  requireColourName("stop_colour", cfg.stop_colour);
-  requireColourName("target_colour", cfg.target_colour);
-  controller.follow_colour = cfg.follow_colour;
-  controller.stop_colour = cfg.stop_colour;
-  controller.target_colour = cfg.target_colour;
-  controller.close_area = cfg.close_area;
-  controller.stop_min_area = cfg.stop_min_area;
-  controller.stop_release_delay = cfg.stop_release_delay;
-  controller.approach_speed = cfg.approach_speed;
-  controller.turn_gain = cfg.turn_gain;
-  controller.stop_distance = cfg.stop_distance;
-  controller.max_linear = cfg.max_linear;
-  controller.k_range = cfg.k_range;
-  controller.k_bearing = cfg.k_bearing;
-  controller.max_angular = cfg.max_angular;
-  controller.search_rate = cfg.search_rate;
-  for (const std::string& error :
-       {validate(controller), checkColoursDetected(controller, detector)}) {
-    if (!error.empty()) throw std::invalid_argument(error);
-  }
-  return settings;
-}
-
-// What only start-up sets: the target object. Throws std::invalid_argument naming the first bad
-// value.
-BeaconControllerConfig readStartupConfig(const ros::NodeHandle& pnh) {
-  BeaconControllerConfig controller;
-  const std::string shape = param<std::string>(pnh, "target_shape", "box");
-  const std::optional<BeaconShape> parsed_shape = parseBeaconShape(shape);
-  if (!parsed_shape) {
-    throw std::invalid_argument("~target_shape must be 'box' or 'sphere', got '" + shape + "'");
-  }
-  controller.target.shape = *parsed_shape;
-  controller.target.size_m = positiveParam(pnh, "target_size", controller.target.size_m);
-  return controller;
-}
 
 // Searching and approaching steer; the states that stand still (holding a stop, arrived, or
 // lost in approach mode, which has nothing to follow) are idle.
@@ -113,14 +31,14 @@ bool steers(BeaconState state) {
 class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
  private:
   void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const BeaconChaserConfig&) override {
-    startup_ = readStartupConfig(pnh);
+    startup_ = beaconStartupConfig(pnh);
   }
 
   // New settings, or new intrinsics (ranges need them), start with fresh controller state (a new
   // mode must not inherit the old one's).
   void configure(const BeaconChaserConfig& config) override {
     startup_.camera = camera();
-    settings_ = coreSettings(config, startup_);
+    settings_ = beaconChaserSettings(config, startup_);
     detector_ = std::make_unique<ColourBlobDetector>(settings_.detector);
     controller_ = std::make_unique<BeaconController>(settings_.controller);
   }
@@ -151,43 +69,17 @@ class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
       found.data = blobs_.colours[i].found;
       found_pubs_[i].publish(found);
     }
-    if (detections_pub_.getNumSubscribers() == 0) return;
-    BeaconDetections out;
-    out.header = frame.header;
-    for (const ColourBlob& blob : blobs_.colours) {
-      BeaconDetection detection;
-      detection.colour = blob.name;
-      detection.found = blob.found;
-      detection.area = blob.area;
-      detection.centroid_x = blob.centroid.x;
-      detection.centroid_y = blob.centroid.y;
-      detection.radius = blob.circle_radius;
-      detection.range = std::numeric_limits<float>::quiet_NaN();
-      if (blob.name == settings_.controller.target_colour && controller_->lastRange()) {
-        detection.range = *controller_->lastRange();
-      }
-      out.detections.push_back(detection);
+    if (detections_pub_.getNumSubscribers() > 0) {
+      detections_pub_.publish(
+          beaconDetections(frame.header, blobs_, settings_.controller.target_colour,
+                           controller_->lastRange(), toString(controller_->state()), sent));
     }
-    out.state = toString(controller_->state());
-    out.linear = sent.linear;
-    out.angular = sent.angular;
-    detections_pub_.publish(out);
   }
 
-  void drawDebug(cv::Mat& canvas) override {
-    for (const ColourBlob& blob : blobs_.colours) {
-      if (!blob.found) continue;
-      cv::drawContours(canvas, std::vector<std::vector<cv::Point>>{blob.contour}, 0,
-                       cv::Scalar(255, 255, 255), 2);
-      cv::circle(canvas, blob.circle_centre, static_cast<int>(blob.circle_radius),
-                 cv::Scalar(0, 255, 255), 1);
-      cv::putText(canvas, blob.name, blob.bounding_box.tl() - cv::Point(0, 5),
-                  cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 2);
-    }
-  }
+  void drawDebug(cv::Mat& canvas) override { ColourBlobDetector::drawDebug(canvas, blobs_); }
 
   BeaconControllerConfig startup_;  // what only start-up sets: the target and the camera
-  Settings settings_;
+  BeaconChaserSettings settings_;
   std::unique_ptr<ColourBlobDetector> detector_;
   std::unique_ptr<BeaconController> controller_;
   BlobResult blobs_;  // the last frame's

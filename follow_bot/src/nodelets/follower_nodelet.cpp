@@ -7,64 +7,16 @@
 // through dynamic_reconfigure.
 #include <memory>
 #include <optional>
-#include <stdexcept>
-#include <string>
 
 #include <nav_msgs/Odometry.h>
 
 #include "follow_bot/FollowerConfig.h"
-#include "follow_bot/LineStatus.h"
-#include "follow_bot/line_detector.h"
 #include "follow_bot/ros/nodelets.h"
-#include "follow_bot/steering_law.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
+#include "messages.h"
+#include "settings.h"
 
 namespace follow_bot {
-
-namespace {
-
-// Everything dynamic_reconfigure can change, as core configurations.
-struct Settings {
-  LineDetectorConfig detector;
-  SteeringConfig steering;
-};
-
-// Throws std::invalid_argument naming the first bad value. Ranges are the .cfg's: readConfig
-// checks them at start-up, the dynamic_reconfigure server clamps live updates to them.
-Settings coreSettings(const FollowerConfig& cfg) {
-  Settings settings;
-  LineDetectorConfig& detector = settings.detector;
-  detector.lower = {cfg.h_min, cfg.s_min, cfg.v_min};
-  detector.upper = {cfg.h_max, cfg.s_max, cfg.v_max};
-  detector.band = {cfg.band_distance, cfg.band_rows};
-  detector.look_ahead_enabled = cfg.look_ahead;
-  detector.look_ahead = {cfg.look_ahead_distance, cfg.band_rows};
-  detector.min_pixels = cfg.min_pixels;
-
-  SteeringConfig& steering = settings.steering;
-  const std::optional<SteeringMode> mode = parseSteeringMode(cfg.mode);
-  if (!mode) {
-    throw std::invalid_argument("~mode must be 'lecture', 'pd' or 'path', got '" + cfg.mode + "'");
-  }
-  steering.mode = *mode;
-  steering.max_linear = cfg.max_linear;
-  steering.min_linear = cfg.min_linear;
-  steering.max_angular = cfg.max_angular;
-  steering.pd.kp = cfg.kp;
-  steering.pd.kd = cfg.kd;
-  steering.pd.taper = cfg.taper;
-  steering.pd.look_ahead_weight = cfg.look_ahead_weight;
-  steering.search.search_rate = cfg.search_rate;
-  steering.path.heading_gain = cfg.heading_gain;
-  steering.path.lateral_gain = cfg.lateral_gain;
-
-  for (const std::string& error : {validate(detector), validate(steering)}) {
-    if (!error.empty()) throw std::invalid_argument(error);
-  }
-  return settings;
-}
-
-}  // namespace
 
 class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
  private:
@@ -85,7 +37,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   // New settings, or new intrinsics (path mode's ground geometry and where the bands land), start
   // with fresh controller state (a new law must not inherit the old one's).
   void configure(const FollowerConfig& config) override {
-    settings_ = coreSettings(config);
+    settings_ = followerSettings(config);
     detector_ = std::make_unique<LineDetector>(settings_.detector, camera());
     placement_reported_ = false;
     // Until camera_info arrives path mode steers with pd.
@@ -144,26 +96,16 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
 
   void report(const Frame& frame, const Twist2D& sent) override {
     last_command_ = sent;
-    if (status_pub_.getNumSubscribers() == 0) return;
-    LineStatus out;
-    out.header = frame.header;
-    out.found = seen_.band.found;
-    out.centroid_x = seen_.band.centroid_x;
-    out.centroid_y = seen_.band.centroid_y;
-    out.error = seen_.band.error_normalised;
-    out.confidence = seen_.band.confidence;
-    out.pixel_count = seen_.band.pixel_count;
-    out.state = toString(state());
-    out.linear = sent.linear;
-    out.angular = sent.angular;
-    status_pub_.publish(out);
+    if (status_pub_.getNumSubscribers() > 0) {
+      status_pub_.publish(lineStatus(frame.header, seen_, toString(state()), sent));
+    }
   }
 
   void drawDebug(cv::Mat& canvas) override { detector_->drawDebug(canvas, seen_); }
 
   std::unique_ptr<LineDetector> detector_;
   std::unique_ptr<SteeringLaw> law_;
-  Settings settings_;
+  FollowerSettings settings_;
   LineMeasurement seen_;  // the last frame's
   bool placement_reported_ = false;
   Twist2D last_command_;  // what the robot was told to do since the previous frame

@@ -7,16 +7,12 @@
 // capture (idle otherwise: no cmd_vel at all).
 // The service waits on its own callback queue while the frames drive the capture on the
 // nodelet's queue.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <sstream>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,20 +27,11 @@
 #include "follow_bot/panorama_stitch.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
+#include "settings.h"
 
 namespace follow_bot {
 
 namespace {
-
-constexpr double kPi = 3.141592653589793;
-
-// "<rule>, got <a> and <b>" unless `ok`: a rule linking two ~params, for a start-up error.
-void requireLinked(bool ok, const std::string& rule, double a, double b) {
-  if (ok) return;
-  std::ostringstream error;
-  error << rule << ", got " << a << " and " << b;
-  throw std::invalid_argument(error.str());
-}
 
 double yawOf(const nav_msgs::Odometry& odom) {
   const geometry_msgs::Quaternion& q = odom.pose.pose.orientation;
@@ -64,40 +51,9 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   }
 
  private:
-  // Ranges are the .cfg's (readConfig checks them); the rules linking two ~params are here.
-  void configure(const PanoramaConfig& cfg) override {
-    requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,
-                  "~step_angle_deg must be at most ~total_angle_deg", cfg.step_angle_deg,
-                  cfg.total_angle_deg);
-    requireLinked(cfg.min_angular <= cfg.max_angular, "~min_angular must be at most ~max_angular",
-                  cfg.min_angular, cfg.max_angular);
-    requireLinked(cfg.yaw_tolerance_deg < cfg.step_angle_deg / 2.0,
-                  "~yaw_tolerance_deg must be below ~step_angle_deg / 2", cfg.yaw_tolerance_deg,
-                  cfg.step_angle_deg);
-    PanoramaCaptureConfig capture;
-    capture.total_angle = cfg.total_angle_deg * kPi / 180.0;
-    capture.step_angle = cfg.step_angle_deg * kPi / 180.0;
-    capture.max_turn_rate = cfg.max_angular;
-    capture.min_turn_rate = cfg.min_angular;
-    capture.yaw_gain = cfg.yaw_gain;
-    capture.yaw_tolerance = cfg.yaw_tolerance_deg * kPi / 180.0;
-    capture.settle_frames = cfg.settle_frames;
-    capture.return_to_start = cfg.return_to_start;
-    capture_ = std::make_unique<PanoramaCapture>(capture);  // validated above and by the ranges
-
-    if (!parseDetector(cfg.detector, match_options_.detector)) {
-      throw std::invalid_argument("~detector must be orb or sift, got '" + cfg.detector + "'");
-    }
-    match_options_.min_inliers = cfg.min_inliers;
-
-    const std::optional<StitchMethod> method = parseStitchMethod(cfg.stitch_method);
-    if (!method) {
-      throw std::invalid_argument("~stitch_method must be auto, features or rotation, got '" +
-                                  cfg.stitch_method + "'");
-    }
-    method_ = *method;
-    frame_timeout_ = cfg.frame_timeout;
-    capture_timeout_ = cfg.capture_timeout;
+  void configure(const PanoramaConfig& config) override {
+    settings_ = panoramaSettings(config);
+    capture_ = std::make_unique<PanoramaCapture>(settings_.capture);
   }
 
   void advertise(ros::NodeHandle& nh, ros::NodeHandle& pnh) override {
@@ -135,7 +91,7 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
       return true;
     }
     const double since_frame = ros::WallTime::now().toSec() - last_frame_wall_;
-    if (!yaw_ || !hasIntrinsics() || since_frame > frame_timeout_) {
+    if (!yaw_ || !hasIntrinsics() || since_frame > settings_.frame_timeout) {
       response.message = std::string("cannot capture: ") +
                          (!yaw_              ? "no pose yet on " + odom_sub_.getTopic()
                           : !hasIntrinsics() ? "no camera_info yet on " + cameraInfoTopic()
@@ -150,8 +106,8 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
       changed_.wait_for(lock, std::chrono::milliseconds(100));
       if (outcome_) break;
       const double silent = ros::WallTime::now().toSec() - last_frame_wall_;
-      const bool timed_out = ros::Time::now().toSec() - started.toSec() > capture_timeout_;
-      if (silent > frame_timeout_ || timed_out || !ros::ok()) {
+      const bool timed_out = ros::Time::now().toSec() - started.toSec() > settings_.capture_timeout;
+      if (silent > settings_.frame_timeout || timed_out || !ros::ok()) {
         capture_->abort();
         start_requested_ = false;
         output().stop();  // the watchdog has mostly done so already
@@ -226,7 +182,8 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   }
 
   Outcome stitchAndPublish(const std_msgs::Header& header) {
-    const CaptureStitch stitched = stitchCapture(frames_, yaws_, camera(), match_options_, method_);
+    const CaptureStitch stitched =
+        stitchCapture(frames_, yaws_, camera(), settings_.match, settings_.method);
     if (stitched.ok())
       panorama_pub_.publish(cv_bridge::CvImage(header, "bgr8", stitched.panorama).toImageMsg());
     return {stitched.ok(), stitched.message};
@@ -234,11 +191,8 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
 
   std::condition_variable_any changed_;  // with mutex(): a capture's outcome
   std::unique_ptr<PanoramaCapture> capture_;
-  image_converter::MatchOptions match_options_;
-  StitchMethod method_ = StitchMethod::kAuto;
+  PanoramaSettings settings_;
   std::optional<double> yaw_;
-  double frame_timeout_ = 1.0;
-  double capture_timeout_ = 120.0;
   double last_frame_wall_ = -1e9;
   bool start_requested_ = false;
   PanoramaCapture::Step step_;  // the last frame's

@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include "follow_bot_common/CommandOutputDefaults.h"
+
 namespace follow_bot {
 
 // A planar velocity command in the robot frame (REP-103): linear along +x (forward) in m/s,
@@ -13,12 +15,15 @@ struct Twist2D {
   double angular = 0.0;
 };
 
+// Defaults: CommandOutput's ~limit_* (cfg/CommandOutput.cfg).
 struct VelocityLimiterConfig {
-  double max_linear = 0.7;                 // m/s, magnitude bound on linear
-  double max_angular = 3.141592653589793;  // rad/s, magnitude bound on angular
-  double max_linear_accel = 1.0;           // m/s^2, bound on |change of linear| per second
-  double max_angular_accel = 6.0;          // rad/s^2, bound on |change of angular| per second
-  bool allow_reverse = false;              // when false, negative linear is clamped to 0
+  // m/s and rad/s, magnitude bounds on linear and angular.
+  double max_linear = follow_bot_common::CommandOutputDefaults::limit_linear;
+  double max_angular = follow_bot_common::CommandOutputDefaults::limit_angular;
+  // m/s^2 and rad/s^2, bounds on |change of linear| and |change of angular| per second.
+  double max_linear_accel = follow_bot_common::CommandOutputDefaults::limit_linear_accel;
+  double max_angular_accel = follow_bot_common::CommandOutputDefaults::limit_angular_accel;
+  bool allow_reverse = false;  // when false, negative linear is clamped to 0
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field.

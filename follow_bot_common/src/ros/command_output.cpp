@@ -13,6 +13,8 @@
 namespace follow_bot {
 
 namespace {
+using Defaults = follow_bot_common::CommandOutputDefaults;
+
 geometry_msgs::Twist twistMsg(const Twist2D& command) {
   geometry_msgs::Twist msg;
   msg.linear.x = command.linear;
@@ -33,10 +35,10 @@ VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse)
 
 CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse)
     : limiter_(readLimits(pnh, allow_reverse)),
-      watchdog_(positiveParam(pnh, "watchdog_timeout", 0.15)),
+      watchdog_(positiveParam(pnh, "watchdog_timeout", Defaults::watchdog_timeout)),
       wall_watchdog_(watchdog_.timeout()),
       updater_(nh, pnh, pnh.getNamespace()),
-      expected_rate_(positiveParam(pnh, "expected_frame_rate", 30.0)) {
+      expected_rate_(positiveParam(pnh, "expected_frame_rate", Defaults::expected_frame_rate)) {
   publisher_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
   // A queue: a lockstep simulator must see every frame's answer.
   status_pub_ = pnh.advertise<follow_bot_msgs::BehaviourStatus>("status", 10);

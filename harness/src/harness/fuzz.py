@@ -29,6 +29,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from follow_bot import core
 from harness.apriltag_image import tag_image
 from harness.run_scenario import free_port, stop, wait_for_port
 from harness.world import package_dir
@@ -36,9 +37,10 @@ from harness.world import package_dir
 SIGN_IMAGE = package_dir("follow_bot") / "assets" / "parking_sign.png"
 SIGN_WIDTH_M = 0.40
 TAG_SIZE_M = 0.30
-# The shared limits' defaults (follow_bot/README.md: ~limit_linear, ~limit_angular).
-LIMIT_LINEAR = 0.7
-LIMIT_ANGULAR = math.pi
+# The shared limits' defaults (follow_bot_common/cfg/CommandOutput.cfg: ~limit_linear,
+# ~limit_angular), as the core's limiter takes them.
+LIMIT_LINEAR = core.VelocityLimiterConfig().max_linear
+LIMIT_ANGULAR = core.VelocityLimiterConfig().max_angular
 # The harness camera: 640x480, 60 deg horizontal field of view.
 WIDTH, HEIGHT = 640, 480
 FX = 554.2562584220408

@@ -5,11 +5,13 @@
 
 #include <opencv2/core.hpp>
 
+#include "image_converter/ImageConverterDefaults.h"
+
 namespace image_converter {
 
 struct OverlayConfig {
-  int radius_px = 25;       // circle radius, pixels
-  int thickness_px = 2;     // outline thickness, pixels
+  int radius_px = ImageConverterDefaults::circle_radius;        // circle radius, pixels
+  int thickness_px = ImageConverterDefaults::circle_thickness;  // outline thickness, pixels
   int min_image_size = 50;  // the circle is drawn only when width and height exceed this
 };
 

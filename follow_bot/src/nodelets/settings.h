@@ -1,0 +1,55 @@
+// The behaviours' .cfg values as their cores' configurations: one function per behaviour, used
+// for the ~params at start-up and for every live update, so both are held to the same rules.
+// Each throws std::invalid_argument naming the first bad ~param; the .cfg ranges are checked
+// before (readConfig at start-up, the dynamic_reconfigure server's clamping live).
+#pragma once
+
+#include <memory>
+
+#include <ros/node_handle.h>
+
+#include "follow_bot/BeaconChaserConfig.h"
+#include "follow_bot/FollowerConfig.h"
+#include "follow_bot/PanoramaConfig.h"
+#include "follow_bot/ParkerConfig.h"
+#include "follow_bot/beacon_controller.h"
+#include "follow_bot/colour_blobs.h"
+#include "follow_bot/line_detector.h"
+#include "follow_bot/marker_target.h"
+#include "follow_bot/panorama_capture.h"
+#include "follow_bot/panorama_stitch.h"
+#include "follow_bot/parking_servo.h"
+#include "follow_bot/steering_law.h"
+
+namespace follow_bot {
+
+struct FollowerSettings {
+  LineDetectorConfig detector;
+  SteeringConfig steering;
+};
+FollowerSettings followerSettings(const FollowerConfig& cfg);
+
+struct BeaconChaserSettings {
+  ColourBlobConfig detector;
+  BeaconControllerConfig controller;
+};
+// On top of `startup` for what only start-up sets (target object, camera).
+BeaconChaserSettings beaconChaserSettings(const BeaconChaserConfig& cfg,
+                                          const BeaconControllerConfig& startup);
+// What only start-up sets: the target object (~target_shape, ~target_size).
+BeaconControllerConfig beaconStartupConfig(const ros::NodeHandle& pnh);
+
+// The marker detector ~target names.
+std::unique_ptr<MarkerDetector> makeMarkerDetector(const ParkerConfig& cfg);
+ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeometry& camera);
+
+struct PanoramaSettings {
+  PanoramaCaptureConfig capture;
+  image_converter::MatchOptions match;
+  StitchMethod method = StitchMethod::kAuto;
+  double frame_timeout = 0.0;    // s, wall time
+  double capture_timeout = 0.0;  // s, ROS time
+};
+PanoramaSettings panoramaSettings(const PanoramaConfig& cfg);
+
+}  // namespace follow_bot
