@@ -18,8 +18,9 @@ import rosgraph
 from harness.node_under_test import private_master
 from harness.run_scenario import stop
 
-# Global by convention: diagnostic_updater's aggregate topic, rosout and the sim clock.
-GLOBAL_TOPICS = {"/diagnostics", "/rosout", "/clock"}
+# Global by convention: diagnostic_updater's aggregate topic, rosout, the sim clock and tf2's
+# (one tree per robot only where they are remapped, as test_two_robots does).
+GLOBAL_TOPICS = {"/diagnostics", "/rosout", "/clock", "/tf", "/tf_static"}
 CAMERA_IN = {"/robot1/camera/rgb/image_raw", "/robot1/camera/rgb/camera_info"}
 
 # (package, node executable, nodelet class, extra args, topics it must publish, subscribe).
