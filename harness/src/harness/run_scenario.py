@@ -110,16 +110,19 @@ def wait_for_node(port: int, node: str, timeout: float, process: subprocess.Pope
     return False
 
 
-def stop(process: subprocess.Popen | None, timeout: float = 10.0) -> None:
-    """SIGINT (what roslaunch and rospy shut down cleanly on), then harder."""
-    if process is None or process.poll() is not None:
-        return
-    process.send_signal(signal.SIGINT)
-    try:
-        process.wait(timeout)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        process.wait()
+def stop(*processes: subprocess.Popen | None, timeout: float = 10.0) -> None:
+    """SIGINT (what roslaunch and rospy shut down cleanly on) to all of them at once, so their
+    shut-downs overlap; then harder for any still running after `timeout`."""
+    running = [p for p in processes if p is not None and p.poll() is None]
+    for process in running:
+        process.send_signal(signal.SIGINT)
+    deadline = time.monotonic() + timeout
+    for process in running:
+        try:
+            process.wait(max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
 
 
 def behaviour_command(scenario: Scenario) -> list[str]:
@@ -200,6 +203,7 @@ def run_one(
             processes.append(process)
             return process
 
+        roscore = None
         try:
             for _ in range(MASTER_START_ATTEMPTS):
                 port = free_port()
@@ -228,8 +232,9 @@ def run_one(
                 show_progress(scenario, env, processes)
             sim.wait(timeout=RUN_TIMEOUT_FLOOR + 20.0 * scenario.duration)
         finally:
-            for process in reversed(processes):
-                stop(process)
+            # The nodes first, together; the master last, so they unregister from it.
+            stop(*(p for p in processes if p is not roscore))
+            stop(roscore)
     wall = time.monotonic() - started
     if not record.is_file():
         raise RuntimeError(f"the simulator wrote no record (see {out}/ros.log)")
