@@ -49,7 +49,7 @@ format: deps
 docs:
 	/usr/bin/python3 tools/param_tables.py --write
 
-# test: every suite, with one nominal run of each scenario family plus every fault run;
+# test: every suite, with every fault run of the scenario families and one run of each other family;
 # test-full: every run of every scenario family's matrix too.
 test: build lint
 	tools/run_tests.sh

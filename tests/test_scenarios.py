@@ -28,14 +28,15 @@ FAMILIES = {
     family: [s.name for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")]
     for family in FAMILY_SIZES
 }
-# `make test` plays these runs: every fault run (camera dropout, a hidden marker) and at least
-# one nominal run of each family; `make test-full` (pytest -m full too) plays every run.
+# `make test` plays these runs: every fault run (camera dropout, a hidden marker; each also ends
+# judged on its family's nominal criteria) and one run of each family without a fault run;
+# `make test-full` (pytest -m full too) plays every run.
 QUICK = {
-    "follower/lap_fast", "follower/dropout", "follower_mounting/h0.2_pitch0",
+    "follower/dropout", "follower_mounting/h0.2_pitch0",
     "dumpster/2m_30deg",
     "beacons_follow_green/dropout",
     "beacons_red_stop/plain",
-    "parker_tag/d2_off20_b60", "parker_tag/dropout", "parker_tag/hidden",
+    "parker_tag/dropout", "parker_tag/hidden",
     "parker_sign/d1.2_off-20_b45",
     "lab_follow_green/dropout", "lab_red_stop/plain", "lab_line_follower/lap_fast",
 }  # fmt: skip
