@@ -72,13 +72,8 @@ def client(key: str) -> None:
 @pytest.fixture(scope="module", params=["parker_tag", "parker_sign"])
 def overload(request) -> tuple[str, dict]:
     key = request.param
-    spec = NODES[key]
-    params = [f"_{k}:={v}" for k, v in spec.params.items()]
-    result = run_with_client(
-        [spec.package, spec.executable, *params],
-        [sys.executable, __file__, "--client", key],
-        timeout=120,
-    )
+    client = [sys.executable, __file__, "--client", key]
+    result = run_with_client(NODES[key].rosrun_args(), client, timeout=120)
     print(key, result)
     return key, result
 

@@ -223,14 +223,8 @@ def client(key: str) -> None:
 @pytest.fixture(scope="module", params=BEHAVIOURS)
 def faults(request) -> tuple[str, dict]:
     key = request.param
-    spec = NODES[key]
-    params = [f"_{k}:={v}" for k, v in spec.params.items()]
-    result = run_with_client(
-        [spec.package, spec.executable, *params],
-        [sys.executable, __file__, "--client", key],
-        timeout=120,
-        sim_time=True,
-    )
+    client = [sys.executable, __file__, "--client", key]
+    result = run_with_client(NODES[key].rosrun_args(), client, timeout=120, sim_time=True)
     print(key, json.dumps(result))
     return key, result
 

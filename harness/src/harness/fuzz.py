@@ -57,6 +57,15 @@ class NodeSpec:
     probe: str = "twist"  # which valid frame and answer check (see Probe)
     capturing: bool = False  # panorama: keep a capture running through the storm
 
+    def rosrun_args(self, *extra: str) -> list[str]:
+        """`rosrun`'s arguments for this node: package, executable, `extra`, then its ~params."""
+        return [
+            self.package,
+            self.executable,
+            *extra,
+            *(f"_{k}:={v}" for k, v in self.params.items()),
+        ]
+
 
 # Nodes run without a robot description: each behaviour takes its camera's mounting from its
 # ~params rather than waiting for tf (follow_bot_common/README.md).
@@ -398,14 +407,13 @@ class NodeUnderTest:
         topics = {"camera/rgb/image_raw": "image", "camera/rgb/camera_info": "camera_info"}
         topics |= {"cmd_vel": "cmd_vel", "odom": "odom"}
         args = [f"{name}:={ns}/{short}" for name, short in topics.items()]
-        params = [f"_{k}:={v}" for k, v in spec.params.items()]
         if compressed:
-            params.append("_image_transport:=compressed")
+            args.append("_image_transport:=compressed")
         self.compressed = compressed
         log_dir.mkdir(parents=True, exist_ok=True)
         self.log = open(log_dir / f"{key}.log", "w")  # noqa: SIM115 (closed in finish)
         self.process = subprocess.Popen(
-            ["rosrun", spec.package, spec.executable, f"__name:={self.name}", *args, *params],
+            ["rosrun", *spec.rosrun_args(f"__name:={self.name}", *args)],
             env=env, stdout=self.log, stderr=subprocess.STDOUT,
         )  # fmt: skip
         self.lock = threading.Lock()

@@ -49,6 +49,13 @@ def format_value(value) -> str:
     return f"{value:.4g}" if isinstance(value, float) else str(value)
 
 
+def headline_text(run: dict) -> str:
+    """A finished run's headline numbers on one line, or why it could not be played."""
+    if "error" in run:
+        return run["error"]
+    return ", ".join(f"{k}={format_value(v)}" for k, v in headline(run["metrics"]).items())
+
+
 def flatten(values, prefix: str = "") -> dict[str, float]:
     """Every finite number in nested metrics by dotted path (list items by index); no booleans."""
     if isinstance(values, dict):
@@ -167,13 +174,8 @@ def markdown(summary: dict, plots: dict[str, str]) -> str:
         "| --- | --- | --- | --- | --- |",
     ]
     for run in summary["runs"]:
-        if "error" in run:
-            verdict, numbers = "ERROR", run["error"]
-        else:
-            verdict = "pass" if run["passed"] else "**FAIL**"
-            numbers = ", ".join(
-                f"{k}={format_value(v)}" for k, v in headline(run["metrics"]).items()
-            )
+        verdict = "ERROR" if "error" in run else "pass" if run["passed"] else "**FAIL**"
+        numbers = headline_text(run)
         failed = "; ".join(_criterion_text(c) for c in run["criteria"] if not c["passed"])
         seed = "" if run["seed"] is None else run["seed"]
         link = f"[{run['name']}]({run['name']}/run.png)"

@@ -37,7 +37,7 @@ from tqdm import tqdm
 from harness.camera import Camera
 from harness.contact_sheet import DEFAULT_FRAMES, write_contact_sheet
 from harness.plot import plot_run
-from harness.report import format_value, headline, write_summary
+from harness.report import format_value, headline, headline_text, write_summary
 from harness.scenario import (
     Scenario,
     ScenarioError,
@@ -299,8 +299,7 @@ def describe(result: dict) -> list[str]:
     for row in result["criteria"]:
         mark = "ok  " if row["passed"] else "FAIL"
         lines.append(f"  {mark} {row['metric']} = {format_value(row['value'])} ({row['rule']})")
-    numbers = ", ".join(f"{k}={format_value(v)}" for k, v in headline(result["metrics"]).items())
-    lines.append(f"  {'PASS' if result['passed'] else 'FAIL'} {numbers}")
+    lines.append(f"  {'PASS' if result['passed'] else 'FAIL'} {headline_text(result)}")
     return lines
 
 
@@ -389,14 +388,8 @@ def main(argv: list[str] | None = None) -> int:
     width = max(len(r["scenario"]) for r in results)
     print("\nsummary")
     for result in results:
-        if "error" in result:
-            verdict, numbers = "ERROR", result["error"]
-        else:
-            verdict = "PASS" if result["passed"] else "FAIL"
-            numbers = ", ".join(
-                f"{k}={format_value(v)}" for k, v in headline(result["metrics"]).items()
-            )
-        print(f"  {result['scenario']:<{width}}  {verdict:<5}  {numbers}")
+        verdict = "ERROR" if "error" in result else "PASS" if result["passed"] else "FAIL"
+        print(f"  {result['scenario']:<{width}}  {verdict:<5}  {headline_text(result)}")
     overall = summary["overall"]
     low, high = overall["success_interval_95"]
     print(
