@@ -21,7 +21,7 @@ SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 # renamed file) fails test_every_family_has_its_runs instead of silently running less.
 FAMILY_SIZES = {
     "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 5,
-    "beacons_red_stop": 5, "parker_tag": 18, "parker_sign": 12,
+    "beacons_red_stop": 5, "parker_tag": 18, "parker_sign": 15,
     # The Python lab nodes (follow_bot/scripts) on their C++ twins' criteria (extends).
     "lab_follow_green": 2, "lab_red_stop": 2, "lab_line_follower": 3,
 }  # fmt: skip
@@ -50,6 +50,7 @@ LENS_TWINS = {
         f"{family}/{start}_lens": f"{family}/{start}"
         for family, starts in {
             "parker_tag": ("d0.8_off15_b10", "d2_off20_b60", "d3_off30_b20"),
+            "parker_sign": ("d0.8_off0_b0", "d1.2_off-20_b45", "d3_off20_b-60"),
         }.items()
         for start in starts
     },
