@@ -20,7 +20,7 @@ SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 # How many runs each family's matrix holds: a file that expands to fewer (a lost matrix entry, a
 # renamed file) fails test_every_family_has_its_runs instead of silently running less.
 FAMILY_SIZES = {
-    "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 5,
+    "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 6,
     "beacons_red_stop": 5, "parker_tag": 18, "parker_sign": 15,
     # The Python lab nodes (follow_bot/scripts) on their C++ twins' criteria (extends).
     "lab_follow_green": 2, "lab_red_stop": 2, "lab_line_follower": 3,
@@ -45,6 +45,7 @@ QUICK = {
 LENS_TWINS = {
     "follower/lap_lens": "follower/lap_default",
     "dumpster/4m_30deg_lens": "dumpster/4m_30deg",
+    "beacons_follow_green/lens_rectify": "beacons_follow_green/plain",  # image_proc rectifies
     "beacons_red_stop/lens": "beacons_red_stop/plain",
     **{
         f"{family}/{start}_lens": f"{family}/{start}"
