@@ -21,7 +21,7 @@ SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 # renamed file) fails test_every_family_has_its_runs instead of silently running less.
 FAMILY_SIZES = {
     "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 6,
-    "beacons_red_stop": 5, "parker_tag": 18, "parker_sign": 15,
+    "beacons_red_stop": 5, "parker_tag": 19, "parker_sign": 15,
     # The Python lab nodes (follow_bot/scripts) on their C++ twins' criteria (extends).
     "lab_follow_green": 2, "lab_red_stop": 2, "lab_line_follower": 3,
 }  # fmt: skip
@@ -47,6 +47,7 @@ LENS_TWINS = {
     "dumpster/4m_30deg_lens": "dumpster/4m_30deg",
     "beacons_follow_green/lens_rectify": "beacons_follow_green/plain",  # image_proc rectifies
     "beacons_red_stop/lens": "beacons_red_stop/plain",
+    "parker_tag/lens_rectify": "parker_tag/d0.8_off15_b10",  # image_proc rectifies
     **{
         f"{family}/{start}_lens": f"{family}/{start}"
         for family, starts in {
