@@ -7,6 +7,10 @@
 // thread, same quad decimation), so it costs no more than a bare vpDetectorAprilTag::detect
 // (make bench measures both on the same frames).
 //
+// Raw frames through a lens (CameraGeometry::lens): the quad found on the raw frame is searched
+// again on the rectified camera's image of the patch around it (refitRectified), where the
+// tag's edges are straight; its corners are then the rectified camera's pixels.
+//
 // Pose: OpenCV's IPPE for a square gives both local minima of the planar pose problem (the tilt
 // ambiguity; Debian's libapriltag does not export its orthogonal-iteration solver). The one with
 // the smaller reprojection residual wins, then Gauss-Newton refines it on the corners;
