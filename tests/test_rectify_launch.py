@@ -1,8 +1,20 @@
-"""follower.launch rectify:=true (issue 14, a real lens): Debian's image_proc rectify nodelet in
-the follower's own nodelet manager, and the follower on its image_rect with ~image_rectified.
-Checked as roslaunch resolves it (--nodes, --args), without a roscore."""
+"""rectify:=true of every behaviour launch (issue 14, a real lens): Debian's image_proc rectify
+nodelet (rectify.launch) in the behaviour's own nodelet manager, and the behaviour's nodelet on
+its image_rect with ~image_rectified. Checked as roslaunch resolves it (--nodes, --args), without
+a roscore."""
 
 import subprocess
+
+import pytest
+
+# launch file: (node name, nodelet class, the manager it makes with rectify)
+BEHAVIOURS = {
+    "follower.launch": ("follower", "follow_bot/FollowerNodelet", "follower_manager"),
+    "parker.launch": ("parker", "follow_bot/ParkerNodelet", "parker_manager"),
+    "beacon_chaser.launch": (
+        "beacon_chaser", "follow_bot/BeaconChaserNodelet", "beacon_chaser_manager",
+    ),
+}  # fmt: skip
 
 
 def roslaunch(*args: str) -> str:
@@ -11,33 +23,45 @@ def roslaunch(*args: str) -> str:
     return done.stdout
 
 
-def test_rectify_loads_image_proc_and_the_follower_into_one_manager():
-    launch = ("follow_bot", "follower.launch", "rectify:=true")
+@pytest.mark.parametrize("launch_file", BEHAVIOURS)
+def test_rectify_loads_image_proc_and_the_behaviour_into_one_manager(launch_file):
+    name, nodelet, manager = BEHAVIOURS[launch_file]
+    launch = ("follow_bot", launch_file, "rectify:=true")
     assert roslaunch("--nodes", *launch).split() == [
-        "/follower_manager", "/rectify", "/follower", "/robot_state_publisher",
+        f"/{manager}", "/rectify", f"/{name}", "/robot_state_publisher",
     ]  # fmt: skip
     rectify = roslaunch("--args", "/rectify", *launch).split()
-    assert rectify[1:4] == ["load", "image_proc/rectify", "follower_manager"]
+    assert rectify[1:4] == ["load", "image_proc/rectify", manager]
     assert "image_mono:=camera/rgb/image_raw" in rectify
     assert "image_rect:=camera/rgb/image_rect" in rectify
-    follower = roslaunch("--args", "/follower", *launch).split()
-    assert follower[1:4] == ["load", "follow_bot/FollowerNodelet", "follower_manager"]
-    assert "camera/rgb/image_raw:=camera/rgb/image_rect" in follower
+    behaviour = roslaunch("--args", f"/{name}", *launch).split()
+    assert behaviour[1:4] == ["load", nodelet, manager]
+    assert "camera/rgb/image_raw:=camera/rgb/image_rect" in behaviour
     params = roslaunch("--dump-params", *launch)
-    assert "/follower/image_rectified: true" in params
+    assert f"/{name}/image_rectified: true" in params
 
 
-def test_rectify_joins_a_given_manager():
-    launch = ("follow_bot", "follower.launch", "rectify:=true", "manager:=robot_manager")
+@pytest.mark.parametrize("launch_file", BEHAVIOURS)
+def test_rectify_joins_a_given_manager(launch_file):
+    name, nodelet, _ = BEHAVIOURS[launch_file]
+    launch = ("follow_bot", launch_file, "rectify:=true", "manager:=robot_manager")
     assert roslaunch("--nodes", *launch).split() == [
-        "/rectify", "/follower", "/robot_state_publisher",
+        "/rectify", f"/{name}", "/robot_state_publisher",
     ]  # fmt: skip
     assert roslaunch("--args", "/rectify", *launch).split()[3] == "robot_manager"
+    assert roslaunch("--args", f"/{name}", *launch).split()[1:4] == [
+        "load", nodelet, "robot_manager",
+    ]  # fmt: skip
 
 
-def test_without_rectify_the_follower_runs_alone_on_image_raw():
-    launch = ("follow_bot", "follower.launch")
-    assert roslaunch("--nodes", *launch).split() == ["/follower", "/robot_state_publisher"]
+@pytest.mark.parametrize("launch_file", BEHAVIOURS)
+def test_without_rectify_the_behaviour_runs_alone_on_image_raw(launch_file):
+    name, _, _ = BEHAVIOURS[launch_file]
+    launch = ("follow_bot", launch_file)
+    assert roslaunch("--nodes", *launch).split() == [f"/{name}", "/robot_state_publisher"]
+    command = roslaunch("--args", f"/{name}", *launch).split()
+    assert command[0].endswith(f"lib/follow_bot/{name}")
+    assert "camera/rgb/image_raw:=camera/rgb/image_raw" in command
     assert "image_rectified" not in roslaunch("--dump-params", *launch)
 
 

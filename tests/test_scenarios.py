@@ -13,14 +13,15 @@ from pathlib import Path
 
 import pytest
 
+from harness.camera import LENSES
 from harness.scenario import load_scenarios
 
 SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 # How many runs each family's matrix holds: a file that expands to fewer (a lost matrix entry, a
 # renamed file) fails test_every_family_has_its_runs instead of silently running less.
 FAMILY_SIZES = {
-    "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 5,
-    "beacons_red_stop": 5, "parker_tag": 15, "parker_sign": 12,
+    "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 6,
+    "beacons_red_stop": 5, "parker_tag": 19, "parker_sign": 15,
     # The Python lab nodes (follow_bot/scripts) on their C++ twins' criteria (extends).
     "lab_follow_green": 2, "lab_red_stop": 2, "lab_line_follower": 3,
 }  # fmt: skip
@@ -40,6 +41,23 @@ QUICK = {
     "parker_sign/d1.2_off-20_b45",
     "lab_follow_green/dropout", "lab_red_stop/plain", "lab_line_follower/lap_fast",
 }  # fmt: skip
+# Issue 14: every behaviour's runs through the turtlebot3 barrel lens, each with the start and
+# the bounds of its pinhole twin.
+LENS_TWINS = {
+    "follower/lap_lens": "follower/lap_default",
+    "dumpster/4m_30deg_lens": "dumpster/4m_30deg",
+    "beacons_follow_green/lens_rectify": "beacons_follow_green/plain",  # image_proc rectifies
+    "beacons_red_stop/lens": "beacons_red_stop/plain",
+    "parker_tag/lens_rectify": "parker_tag/d0.8_off15_b10",  # image_proc rectifies
+    **{
+        f"{family}/{start}_lens": f"{family}/{start}"
+        for family, starts in {
+            "parker_tag": ("d0.8_off15_b10", "d2_off20_b60", "d3_off30_b20"),
+            "parker_sign": ("d0.8_off0_b0", "d1.2_off-20_b45", "d3_off20_b-60"),
+        }.items()
+        for start in starts
+    },
+}
 RUNS = [
     pytest.param(name, marks=() if name in QUICK else pytest.mark.full)
     for names in FAMILIES.values()
@@ -53,6 +71,21 @@ def test_every_family_has_its_runs():
     quick_families = {name.split("/")[0] for name in QUICK}
     assert {name for names in FAMILIES.values() for name in names} >= QUICK
     assert quick_families == set(FAMILY_SIZES)
+
+
+def test_lens_runs_keep_their_pinhole_twins_start_and_bounds():
+    runs = {
+        s.name: s
+        for family in FAMILY_SIZES
+        for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")
+        if not family.startswith("lab_")
+    }
+    assert {name for name, s in runs.items() if s.perturbations.lens} == set(LENS_TWINS)
+    for name, twin_name in LENS_TWINS.items():
+        run, twin = runs[name], runs[twin_name]
+        assert run.perturbations.lens == LENSES["turtlebot3"], name
+        assert not twin.perturbations.lens, twin_name
+        assert (run.start, run.criteria) == (twin.start, twin.criteria), name
 
 
 @pytest.fixture(scope="session")

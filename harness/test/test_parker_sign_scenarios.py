@@ -7,13 +7,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from harness.camera import LENSES
 from harness.render import Renderer
 from harness.scenario import check, find_object, load_scenarios, metrics
 from harness.world import TextureMarker, load_world
 
-SCENARIOS = load_scenarios(
+FAMILY = load_scenarios(
     Path(__file__).resolve().parents[2] / "worlds" / "scenarios" / "parker_sign.yaml"
 )
+# The pinhole runs; the lens runs replay three of their starts through a barrel lens.
+SCENARIOS = [s for s in FAMILY if not s.perturbations.lens]
 
 
 def _loaded(scenario):
@@ -47,6 +50,19 @@ def test_twelve_start_poses_four_with_the_sign_out_of_view():
         assert inside.all() or not inside.any(), f"{scenario.name}: sign half in view"
         out_of_view += not inside.any()
     assert out_of_view == 4
+
+
+def test_the_lens_runs_replay_pinhole_starts_through_the_turtlebot3_lens():
+    lens_runs = [s for s in FAMILY if s.perturbations.lens]
+    assert [s.name for s in lens_runs] == [
+        "parker_sign/d0.8_off0_b0_lens", "parker_sign/d1.2_off-20_b45_lens",
+        "parker_sign/d3_off20_b-60_lens",
+    ]  # fmt: skip
+    twins = {s.name: s for s in SCENARIOS}
+    for run in lens_runs:
+        twin = twins[run.name.removesuffix("_lens")]
+        assert run.start == twin.start and run.criteria == twin.criteria
+        assert run.perturbations.lens == LENSES["turtlebot3"]
 
 
 @pytest.mark.parametrize("scenario", SCENARIOS[:1], ids=lambda s: s.name)

@@ -7,6 +7,10 @@
 // thread, same quad decimation), so it costs no more than a bare vpDetectorAprilTag::detect
 // (make bench measures both on the same frames).
 //
+// Raw frames through a lens (CameraGeometry::lens): the quad found on the raw frame is searched
+// again on the rectified camera's image of the patch around it (refitRectified), where the
+// tag's edges are straight; its corners are then the rectified camera's pixels.
+//
 // Pose: OpenCV's IPPE for a square gives both local minima of the planar pose problem (the tilt
 // ambiguity; Debian's libapriltag does not export its orthogonal-iteration solver). The one with
 // the smaller reprojection residual wins, then Gauss-Newton refines it on the corners;
@@ -18,6 +22,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
@@ -65,6 +70,20 @@ class TagDetector : public MarkerDetector {
   const TagDetectorConfig& config() const { return config_; }
 
  private:
+  struct Quad {
+    std::vector<cv::Point2d> corners;  // apriltag's order (BL, BR, TR, TL), OpenCV pixel centres
+    double decision_margin = 0;
+  };
+  // Margin of the rectified patch refitRectified searches, a fraction of the quad's size.
+  static constexpr double kRefitMargin = 0.25;
+  // The configured tag's best accepted detection in `gray`, or none.
+  std::optional<Quad> findQuad(const cv::Mat& gray) const;
+  // The quad found again on the rectified camera's image of the patch around `corners`
+  // (rectified pixels) of the raw frame `raw`, or none when it is not found there.
+  std::optional<std::vector<cv::Point2d>> refitRectified(
+      const cv::Mat& raw, const CameraGeometry& camera,
+      const std::vector<cv::Point2d>& corners) const;
+
   struct Impl;
   TagDetectorConfig config_;
   std::unique_ptr<Impl> impl_;

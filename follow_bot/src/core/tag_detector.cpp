@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 
 extern "C" {
 #include <apriltag/apriltag.h>
@@ -175,16 +176,14 @@ cv::Size quadSearchSize(cv::Size image, double quad_decimate) {
   return {1 + (image.width - 1) / factor, 1 + (image.height - 1) / factor};
 }
 
-std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
-                                                     const CameraGeometry& camera) {
-  if (gray.empty() || gray.type() != CV_8UC1 || !validate(camera).empty()) return std::nullopt;
+std::optional<TagDetector::Quad> TagDetector::findQuad(const cv::Mat& gray) const {
   const cv::Size searched = quadSearchSize(gray.size(), config_.quad_decimate);
   if (searched.height < kMinQuadSearchRows || searched.width < 1) return std::nullopt;
   // apriltag reads the pixels in place; it never writes to its input image.
   image_u8_t image{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]),
                    const_cast<uint8_t*>(gray.ptr<uint8_t>())};
   zarray_t* detections = apriltag_detector_detect(impl_->detector, &image);
-  apriltag_detection_t* best = nullptr;
+  const apriltag_detection_t* best = nullptr;
   for (int i = 0; i < zarray_size(detections); ++i) {
     apriltag_detection_t* det = nullptr;
     zarray_get(detections, i, &det);
@@ -194,70 +193,123 @@ std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
     }
     if (!best || det->decision_margin > best->decision_margin) best = det;
   }
-  std::optional<MarkerObservation> out;
+  std::optional<Quad> quad;
   if (best) {
-    out = MarkerObservation{};
-    out->id = best->id;
-    out->quality = best->decision_margin;
+    quad = Quad{};
+    quad->decision_margin = best->decision_margin;
     // apriltag's pixel centres are at half-integer coordinates (pixel (0, 0) spans [0, 1]), ours
     // and the intrinsics' at integers (OpenCV, ROS CameraInfo, ViSP).
-    std::vector<cv::Point2d> image;
     for (int i = 0; i < 4; ++i) {
-      image.emplace_back(best->p[i][0] - kApriltagPixelCentre,
-                         best->p[i][1] - kApriltagPixelCentre);
-    }
-    // The pose is the rectified camera's: corners of a raw frame go through the lens first.
-    image = rectifyPixels(camera, image);
-    for (int i = 0; i < 4; ++i) out->corners[i] = image[3 - i];  // apriltag wraps BL, BR, TR, TL
-
-    // Both minima of the planar pose problem (IPPE for a square, object points in apriltag's
-    // corner order), then the chosen one refined on the four corners (refinePose).
-    const double h = config_.size_m / 2.0;
-    const std::vector<cv::Point3d> object = {{-h, h, 0}, {h, h, 0}, {h, -h, 0}, {-h, -h, 0}};
-    const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-    std::vector<cv::Mat> rvecs, tvecs;
-    std::vector<double> residuals;
-    cv::solvePnPGeneric(object, image, k, cv::noArray(), rvecs, tvecs, false,
-                        cv::SOLVEPNP_IPPE_SQUARE, cv::noArray(), cv::noArray(), residuals);
-    std::vector<PoseCandidate> candidates;
-    for (std::size_t s = 0; s < rvecs.size() && s < residuals.size(); ++s) {
-      PoseCandidate candidate;
-      cv::Rodrigues(rvecs[s], candidate.rotation);
-      candidate.translation = cv::Vec3d(tvecs[s]);
-      candidate.rms_px = residuals[s];
-      if (candidate.translation[2] > 0 && std::isfinite(candidate.rms_px)) {
-        candidates.push_back(candidate);
-      }
-    }
-    if (candidates.empty() || !std::all_of(image.begin(), image.end(), [](const cv::Point2d& p) {
-          return std::isfinite(p.x) && std::isfinite(p.y);
-        })) {
-      out.reset();
-    } else {
-      std::size_t pick = 0;
-      if (candidates.size() == 2) {
-        const double low = std::min(candidates[0].rms_px, candidates[1].rms_px);
-        const double high = std::max(candidates[0].rms_px, candidates[1].rms_px);
-        const bool ambiguous =
-            high <= config_.ambiguity_ratio * low || high <= config_.ambiguity_px;
-        if (ambiguous && previous_rotation_) {
-          pick = rotationAngle(*previous_rotation_, candidates[1].rotation) <
-                         rotationAngle(*previous_rotation_, candidates[0].rotation)
-                     ? 1
-                     : 0;
-        } else {
-          pick = candidates[1].rms_px < candidates[0].rms_px ? 1 : 0;
-        }
-      }
-      out->rotation = candidates[pick].rotation;
-      out->translation = candidates[pick].translation;
-      refinePose(object, image, camera, out->rotation, out->translation);
-      out->reprojection_error_px =
-          reprojectionRms(object, image, camera, out->rotation, out->translation);
-      previous_rotation_ = out->rotation;
+      quad->corners.emplace_back(best->p[i][0] - kApriltagPixelCentre,
+                                 best->p[i][1] - kApriltagPixelCentre);
     }
   }
   apriltag_detections_destroy(detections);
+  return quad;
+}
+
+std::optional<std::vector<cv::Point2d>> TagDetector::refitRectified(
+    const cv::Mat& raw, const CameraGeometry& camera,
+    const std::vector<cv::Point2d>& corners) const {
+  // The rectified camera's pixels around the quad, with a margin of a quarter of its size (the
+  // white border apriltag needs around the black square, and the corners' movement).
+  cv::Point2d low = corners.front(), high = corners.front();
+  for (const cv::Point2d& corner : corners) {
+    low = {std::min(low.x, corner.x), std::min(low.y, corner.y)};
+    high = {std::max(high.x, corner.x), std::max(high.y, corner.y)};
+  }
+  const double margin = kRefitMargin * std::max(high.x - low.x, high.y - low.y) + 2.0;
+  const cv::Rect2d patch_bounds(low - cv::Point2d(margin, margin),
+                                high + cv::Point2d(margin, margin));
+  // A quad far larger than the frame or far outside it is no real tag (a lens that folds the
+  // image over); its patch would cost more than the frame.
+  const cv::Rect2d near_frame(-raw.cols, -raw.rows, 3.0 * raw.cols, 3.0 * raw.rows);
+  if ((patch_bounds & near_frame) != patch_bounds) return std::nullopt;
+  const cv::Rect patch_rect(static_cast<int>(std::floor(patch_bounds.x)),
+                            static_cast<int>(std::floor(patch_bounds.y)),
+                            static_cast<int>(std::ceil(patch_bounds.width)),
+                            static_cast<int>(std::ceil(patch_bounds.height)));
+  const CameraLens& lens = *camera.lens;
+  const cv::Matx33d patch_camera(camera.fx, 0.0, camera.cx - patch_rect.x, 0.0, camera.fy,
+                                 camera.cy - patch_rect.y, 0.0, 0.0, 1.0);
+  cv::Mat map, map_fraction, patch;
+  cv::initUndistortRectifyMap(lens.camera_matrix, lens.distortion, lens.rectification, patch_camera,
+                              patch_rect.size(), CV_16SC2, map, map_fraction);
+  cv::remap(raw, patch, map, map_fraction, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  std::optional<Quad> quad = findQuad(patch);
+  if (!quad) return std::nullopt;
+  for (cv::Point2d& corner : quad->corners) corner += cv::Point2d(patch_rect.tl());
+  return quad->corners;
+}
+
+std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
+                                                     const CameraGeometry& camera) {
+  if (gray.empty() || gray.type() != CV_8UC1 || !validate(camera).empty()) return std::nullopt;
+  std::optional<Quad> quad = findQuad(gray);
+  if (!quad) return std::nullopt;
+  // The pose is the rectified camera's: corners of a raw frame go through the lens first. A
+  // barrel lens bows the tag's straight edges in the raw frame and apriltag fits straight lines
+  // to them, so their corners land beyond the true ones (through the harness's turtlebot3 lens
+  // the tag looks 9 mm nearer at the parker's 0.5 m standoff): the quad is fitted again on the
+  // rectified image of the patch around it, where its edges are straight.
+  std::vector<cv::Point2d> image = rectifyPixels(camera, quad->corners);
+  if (!std::all_of(image.begin(), image.end(),
+                   [](const cv::Point2d& p) { return std::isfinite(p.x) && std::isfinite(p.y); })) {
+    return std::nullopt;
+  }
+  if (camera.lens) {
+    if (std::optional<std::vector<cv::Point2d>> refitted = refitRectified(gray, camera, image)) {
+      image = *refitted;
+    }
+  }
+  std::optional<MarkerObservation> out = MarkerObservation{};
+  out->id = config_.id;
+  out->quality = quad->decision_margin;
+  for (int i = 0; i < 4; ++i) out->corners[i] = image[3 - i];  // apriltag wraps BL, BR, TR, TL
+
+  // Both minima of the planar pose problem (IPPE for a square, object points in apriltag's
+  // corner order), then the chosen one refined on the four corners (refinePose).
+  const double h = config_.size_m / 2.0;
+  const std::vector<cv::Point3d> object = {{-h, h, 0}, {h, h, 0}, {h, -h, 0}, {-h, -h, 0}};
+  const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  std::vector<cv::Mat> rvecs, tvecs;
+  std::vector<double> residuals;
+  cv::solvePnPGeneric(object, image, k, cv::noArray(), rvecs, tvecs, false,
+                      cv::SOLVEPNP_IPPE_SQUARE, cv::noArray(), cv::noArray(), residuals);
+  std::vector<PoseCandidate> candidates;
+  for (std::size_t s = 0; s < rvecs.size() && s < residuals.size(); ++s) {
+    PoseCandidate candidate;
+    cv::Rodrigues(rvecs[s], candidate.rotation);
+    candidate.translation = cv::Vec3d(tvecs[s]);
+    candidate.rms_px = residuals[s];
+    if (candidate.translation[2] > 0 && std::isfinite(candidate.rms_px)) {
+      candidates.push_back(candidate);
+    }
+  }
+  if (candidates.empty()) {
+    out.reset();
+  } else {
+    std::size_t pick = 0;
+    if (candidates.size() == 2) {
+      const double low = std::min(candidates[0].rms_px, candidates[1].rms_px);
+      const double high = std::max(candidates[0].rms_px, candidates[1].rms_px);
+      const bool ambiguous = high <= config_.ambiguity_ratio * low || high <= config_.ambiguity_px;
+      if (ambiguous && previous_rotation_) {
+        pick = rotationAngle(*previous_rotation_, candidates[1].rotation) <
+                       rotationAngle(*previous_rotation_, candidates[0].rotation)
+                   ? 1
+                   : 0;
+      } else {
+        pick = candidates[1].rms_px < candidates[0].rms_px ? 1 : 0;
+      }
+    }
+    out->rotation = candidates[pick].rotation;
+    out->translation = candidates[pick].translation;
+    refinePose(object, image, camera, out->rotation, out->translation);
+    out->reprojection_error_px =
+        reprojectionRms(object, image, camera, out->rotation, out->translation);
+    previous_rotation_ = out->rotation;
+  }
   return out;
 }
 
