@@ -205,7 +205,8 @@ void bindColourBlobs(py::module_& m) {
                      "A list (assign a new one to change it).")
       .def_readwrite("open_kernel", &ColourBlobConfig::open_kernel)
       .def_readwrite("close_kernel", &ColourBlobConfig::close_kernel)
-      .def_readwrite("min_area", &ColourBlobConfig::min_area);
+      .def_readwrite("min_area", &ColourBlobConfig::min_area)
+      .def_readwrite("roundness_tolerance", &ColourBlobConfig::roundness_tolerance);
   defKeywordInit(config, static_cast<Validator<ColourBlobConfig>>(&validate));
 
   py::class_<ColourBlob> blob(m, "ColourBlob",

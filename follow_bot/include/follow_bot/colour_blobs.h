@@ -44,11 +44,28 @@ struct ColourBlobConfig {
   int close_kernel = 5;
   // A colour is found when its largest external contour encloses at least this many px^2.
   double min_area = BeaconChaserDefaults::min_area;
+  // For balls: a contour counts only when its boundary's RMS distance to the circle that best
+  // fits it is at most 1 px (pixel quantisation) plus this fraction of that circle's radius.
+  // Boundary pixels on the image border are left out, so a ball cut by the frame's edge is
+  // judged by its arc; posters, boxes and crescents are not round. 0: any shape, as the lab
+  // worksheet's colour steps take it; the beacon chaser sets its ~roundness_tolerance.
+  double roundness_tolerance = 0.0;
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field,
 // e.g. "colours[1] (green): sensitivity must be in [0, 90], got 95".
 std::string validate(const ColourBlobConfig& config);
+
+// How far `contour` strays from the circle that best fits it (least squares, Kasa): the RMS of
+// its boundary pixels' distances to that circle, and the circle's radius, in px. Pixels on the
+// border of an `image`-sized frame are left out. Nullopt when fewer than 5 pixels remain or
+// they fit no circle (a straight run): the shape cannot be judged.
+struct CircleFit {
+  cv::Point2d centre;
+  double radius = 0.0;
+  double rms_error = 0.0;
+};
+std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Size image);
 
 // The largest blob of one colour. All geometry is in full-image pixel coordinates with pixel
 // centres at integer positions (as cv::moments); every field but `name` is zero/empty unless
@@ -56,9 +73,9 @@ std::string validate(const ColourBlobConfig& config);
 struct ColourBlob {
   std::string name;
   bool found = false;
-  int blob_count = 0;         // external contours of this colour with area >= min_area
-  double area = 0.0;          // px^2 enclosed by the largest contour (cv::contourArea)
-  cv::Point2d centroid;       // of the area enclosed by the contour (contour moments)
+  int blob_count = 0;    // external contours of this colour with area >= min_area, round enough
+  double area = 0.0;     // px^2 enclosed by the largest contour (cv::contourArea)
+  cv::Point2d centroid;  // of the area enclosed by the contour (contour moments)
   cv::Point2f circle_centre;  // minimum enclosing circle of the contour
   float circle_radius = 0.0f;
   cv::Rect bounding_box;           // inclusive pixels, as cv::boundingRect
@@ -98,6 +115,8 @@ class ColourBlobDetector {
 
  private:
   void cleanedMask(const cv::Mat& hsv, const ColourSpec& spec, cv::Mat& mask) const;
+  // The roundness gate (ColourBlobConfig::roundness_tolerance); true when off or not judgeable.
+  bool roundEnough(const std::vector<cv::Point>& contour, cv::Size image) const;
 
   ColourBlobConfig config_;
   cv::Mat open_kernel_;   // empty when opening is off

@@ -1,6 +1,7 @@
 #include "follow_bot/colour_blobs.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -85,10 +86,47 @@ std::string validate(const ColourBlobConfig& config) {
            checkKernel("open_kernel", config.open_kernel),
            checkKernel("close_kernel", config.close_kernel),
            requireAtLeast("min_area", config.min_area, 0.0),
+           requireInRange("roundness_tolerance", config.roundness_tolerance, 0.0, 1.0),
        }) {
     if (!error.empty()) return error;
   }
   return "";
+}
+
+std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Size image) {
+  // x^2 + y^2 + D x + E y + F = 0 in the least-squares sense: linear in (D, E, F).
+  std::vector<cv::Point2d> arc;
+  for (const cv::Point& p : contour) {
+    if (p.x > 0 && p.y > 0 && p.x < image.width - 1 && p.y < image.height - 1) arc.push_back(p);
+  }
+  constexpr std::size_t kMinPoints = 5;
+  if (arc.size() < kMinPoints) return std::nullopt;
+  cv::Mat a(static_cast<int>(arc.size()), 3, CV_64F);
+  cv::Mat b(static_cast<int>(arc.size()), 1, CV_64F);
+  for (int i = 0; i < a.rows; ++i) {
+    const cv::Point2d& p = arc[i];
+    a.at<double>(i, 0) = p.x;
+    a.at<double>(i, 1) = p.y;
+    a.at<double>(i, 2) = 1.0;
+    b.at<double>(i) = -(p.x * p.x + p.y * p.y);
+  }
+  const cv::SVD svd(a);
+  // Rank < 3: the pixels lie on one line, which fits no circle.
+  if (svd.w.at<double>(2) <= 1e-9 * svd.w.at<double>(0)) return std::nullopt;
+  cv::Mat def;
+  svd.backSubst(b, def);
+  CircleFit fit;
+  fit.centre = {-def.at<double>(0) / 2.0, -def.at<double>(1) / 2.0};
+  const double radius_squared = fit.centre.dot(fit.centre) - def.at<double>(2);
+  if (!(radius_squared > 0.0) || !std::isfinite(radius_squared)) return std::nullopt;
+  fit.radius = std::sqrt(radius_squared);
+  double sum_squared = 0.0;
+  for (const cv::Point2d& p : arc) {
+    const double error = cv::norm(p - fit.centre) - fit.radius;
+    sum_squared += error * error;
+  }
+  fit.rms_error = std::sqrt(sum_squared / static_cast<double>(arc.size()));
+  return fit;
 }
 
 const ColourBlob* BlobResult::find(const std::string& name) const {
@@ -160,7 +198,7 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
     const std::vector<cv::Point>* largest = nullptr;
     for (const std::vector<cv::Point>& contour : contours) {
       const double area = cv::contourArea(contour);
-      if (area < config_.min_area) continue;
+      if (area < config_.min_area || !roundEnough(contour, bgr.size())) continue;
       ++blob.blob_count;
       if (largest == nullptr || area > blob.area) {
         largest = &contour;
@@ -183,6 +221,13 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
     blob.contour = *largest;
   }
   return result;
+}
+
+bool ColourBlobDetector::roundEnough(const std::vector<cv::Point>& contour, cv::Size image) const {
+  if (config_.roundness_tolerance <= 0.0) return true;
+  const std::optional<CircleFit> fit = fitCircle(contour, image);
+  constexpr double kQuantisationPx = 1.0;
+  return !fit || fit->rms_error <= kQuantisationPx + config_.roundness_tolerance * fit->radius;
 }
 
 cv::Mat ColourBlobDetector::mask(const cv::Mat& bgr, const std::string& name) const {

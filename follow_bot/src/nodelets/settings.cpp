@@ -64,12 +64,17 @@ BeaconChaserSettings beaconChaserSettings(const BeaconChaserConfig& cfg,
     colour.v_min = cfg.v_min;
   }
   detector.min_area = cfg.min_area;
+  const BeaconMode mode =
+      parseChoice("mode", cfg.mode, parseBeaconMode, "'follow_green_stop_red' or 'approach'");
+  // Lab 5's beacons are balls; an approached box is not round.
+  const bool box_target =
+      mode == BeaconMode::kApproach && startup.target.shape == BeaconShape::kBox;
+  detector.roundness_tolerance = box_target ? 0.0 : cfg.roundness_tolerance;
   requireValid({validate(detector)});
 
   BeaconControllerConfig& controller = settings.controller;
   controller = startup;
-  controller.mode =
-      parseChoice("mode", cfg.mode, parseBeaconMode, "'follow_green_stop_red' or 'approach'");
+  controller.mode = mode;
   // Checked in every mode: a typo is a typo.
   controller.follow_colour = colourName("follow_colour", cfg.follow_colour);
   controller.stop_colour = colourName("stop_colour", cfg.stop_colour);
