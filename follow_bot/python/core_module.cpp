@@ -206,8 +206,16 @@ void bindColourBlobs(py::module_& m) {
       .def_readwrite("open_kernel", &ColourBlobConfig::open_kernel)
       .def_readwrite("close_kernel", &ColourBlobConfig::close_kernel)
       .def_readwrite("min_area", &ColourBlobConfig::min_area)
-      .def_readwrite("roundness_tolerance", &ColourBlobConfig::roundness_tolerance);
+      .def_readwrite("roundness_tolerance", &ColourBlobConfig::roundness_tolerance)
+      .def_readwrite("floor_ball", &ColourBlobConfig::floor_ball, "A FloorBall or None.");
   defKeywordInit(config, static_cast<Validator<ColourBlobConfig>>(&validate));
+  py::class_<ColourBlobConfig::FloorBall> floor_ball(config, "FloorBall");
+  floor_ball.def_readwrite("radius_m", &ColourBlobConfig::FloorBall::radius_m)
+      .def_readwrite("tolerance", &ColourBlobConfig::FloorBall::tolerance)
+      .def_readwrite("camera", &ColourBlobConfig::FloorBall::camera);
+  defKeywordInit(floor_ball);
+  m.def("floor_ball_radius", &floorBallRadius, "camera"_a, "centre"_a, "radius_px"_a,
+        "The radius of the ball on the floor whose silhouette is this circle; None if none fits.");
 
   py::class_<ColourBlob> blob(m, "ColourBlob",
                               "The largest blob of one colour; pixel centres at integers.");

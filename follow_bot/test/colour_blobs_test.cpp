@@ -410,6 +410,66 @@ TEST(ColourBlobDetector, OnlyRoundBlobsAreBeaconsAndTheFramesEdgeDoesNotCount) {
   EXPECT_TRUE(blobOf(all, "blue").found);
 }
 
+// The image circle of a ball of `radius` m resting on the floor `distance` m ahead of a level
+// camera (the default one, pitch 0) on its optical axis: its silhouette's ends on the image's
+// middle column are the rays tangent to the ball, theta -+ alpha below the horizontal.
+std::pair<cv::Point2d, double> floorBallCircle(const CameraGeometry& camera, double distance,
+                                               double radius) {
+  const double drop = camera.height_m - radius;
+  const double theta = std::atan2(drop, distance);
+  const double alpha = std::asin(radius / std::hypot(drop, distance));
+  const double top = camera.cy + camera.fy * std::tan(theta - alpha);
+  const double bottom = camera.cy + camera.fy * std::tan(theta + alpha);
+  return {{camera.cx, 0.5 * (top + bottom)}, 0.5 * (bottom - top)};
+}
+
+CameraGeometry levelCamera() {
+  CameraGeometry camera;
+  camera.pitch_rad = 0.0;
+  return camera;
+}
+
+TEST(FloorBallRadius, RecoversTheRadiusOfABallOnTheFloorAndNoneAboveTheHorizon) {
+  const CameraGeometry camera = levelCamera();
+  for (const double radius : {0.1, 0.2, 0.25}) {
+    for (const double distance : {0.8, 2.0, 4.0}) {
+      const auto [centre, radius_px] = floorBallCircle(camera, distance, radius);
+      const std::optional<double> implied = floorBallRadius(camera, centre, radius_px);
+      ASSERT_TRUE(implied) << radius << " m at " << distance << " m";
+      EXPECT_NEAR(*implied, radius, 1e-9) << radius << " m at " << distance << " m";
+    }
+  }
+  // A 20 px disk centred 40 px above the horizon (a wall picture): no ball on the floor.
+  EXPECT_FALSE(floorBallRadius(camera, {320.0, camera.cy - 40.0}, 20.0));
+  EXPECT_FALSE(floorBallRadius(camera, {320.0, 300.0}, 0.0));
+}
+
+TEST(ColourBlobDetector, FloorBallGateKeepsOnlyBallsOfTheBeaconsSize) {
+  const CameraGeometry camera = levelCamera();
+  cv::Mat frame = greyFrame();
+  const auto [beacon, beacon_px] = floorBallCircle(camera, 2.0, 0.2);
+  drawDisk(frame, beacon, beacon_px, kPureGreen, true);
+  const auto [small, small_px] = floorBallCircle(camera, 1.0, 0.12);  // larger in the view
+  drawDisk(frame, small + cv::Point2d(-200.0, 0.0), small_px, kPureGreen, true);
+  drawDisk(frame, {500.0, 150.0}, 30.0, kPureRed);  // a round picture on a wall
+  ColourBlobConfig balls;
+  balls.floor_ball = ColourBlobConfig::FloorBall{0.2, 0.3, camera};
+  const BlobResult result = ColourBlobDetector(balls).detect(frame);
+  const ColourBlob green = blobOf(result, "green");
+  ASSERT_TRUE(green.found);
+  EXPECT_EQ(green.blob_count, 1);
+  EXPECT_NEAR(green.centroid.x, beacon.x, 0.5);
+  EXPECT_FALSE(blobOf(result, "red").found);
+
+  const BlobResult all = ColourBlobDetector().detect(frame);  // any size
+  EXPECT_EQ(blobOf(all, "green").blob_count, 2);
+  EXPECT_NEAR(blobOf(all, "green").centroid.x, small.x - 200.0, 0.5);  // the larger
+  EXPECT_TRUE(blobOf(all, "red").found);
+
+  balls.floor_ball->radius_m = -0.2;
+  EXPECT_EQ(validate(balls), "floor_ball.radius_m must be > 0, got -0.2");
+}
+
 TEST(ColourBlobDetector, MaskOfUnknownColourIsEmpty) {
   const cv::Mat frame = greyFrame();
   EXPECT_TRUE(ColourBlobDetector().mask(frame, "purple").empty());

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/BeaconChaserDefaults.h"
+#include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
 
@@ -50,6 +51,17 @@ struct ColourBlobConfig {
   // judged by its arc; posters, boxes and crescents are not round. 0: any shape, as the lab
   // worksheet's colour steps take it; the beacon chaser sets its ~roundness_tolerance.
   double roundness_tolerance = 0.0;
+  // For balls of a known size resting on the floor: a contour counts only when the ball its
+  // circle implies (floorBallRadius) has this radius within `tolerance` (a fraction of it).
+  // A wall picture lies above the horizon, a smaller or larger ball has another radius. Empty:
+  // any size, as the lab worksheet's colour steps take it; the beacon chaser sets its
+  // ~ball_radius and ~ball_size_tolerance.
+  struct FloorBall {
+    double radius_m = 0.0;
+    double tolerance = 0.0;
+    CameraGeometry camera;
+  };
+  std::optional<FloorBall> floor_ball;
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field,
@@ -67,15 +79,26 @@ struct CircleFit {
 };
 std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Size image);
 
+// The radius of the ball resting on the floor whose silhouette has the circle (`centre`,
+// `radius_px`, raw image pixels) in `camera`'s view: the circle's ends on the line through the
+// principal point are the rays tangent to the ball (see sphereCentreFromCircle), so their
+// bisector points at its centre, at angle theta below the horizontal, and half the angle
+// between them is its angular radius alpha; a ball of radius r touching the floor has its
+// centre r below the camera's height h, hence r = h / (1 + sin(theta) / sin(alpha)). Nullopt
+// when no ball on the floor fits (the circle is too high in the view: a wall picture) or the
+// input is unusable.
+std::optional<double> floorBallRadius(const CameraGeometry& camera, const cv::Point2d& centre,
+                                      double radius_px);
+
 // The largest blob of one colour. All geometry is in full-image pixel coordinates with pixel
 // centres at integer positions (as cv::moments); every field but `name` is zero/empty unless
 // `found`.
 struct ColourBlob {
   std::string name;
   bool found = false;
-  int blob_count = 0;    // external contours of this colour with area >= min_area, round enough
-  double area = 0.0;     // px^2 enclosed by the largest contour (cv::contourArea)
-  cv::Point2d centroid;  // of the area enclosed by the contour (contour moments)
+  int blob_count = 0;         // contours of this colour with area >= min_area that pass the gates
+  double area = 0.0;          // px^2 enclosed by the largest contour (cv::contourArea)
+  cv::Point2d centroid;       // of the area enclosed by the contour (contour moments)
   cv::Point2f circle_centre;  // minimum enclosing circle of the contour
   float circle_radius = 0.0f;
   cv::Rect bounding_box;           // inclusive pixels, as cv::boundingRect
@@ -115,8 +138,9 @@ class ColourBlobDetector {
 
  private:
   void cleanedMask(const cv::Mat& hsv, const ColourSpec& spec, cv::Mat& mask) const;
-  // The roundness gate (ColourBlobConfig::roundness_tolerance); true when off or not judgeable.
-  bool roundEnough(const std::vector<cv::Point>& contour, cv::Size image) const;
+  // The roundness and floor-ball gates (ColourBlobConfig::roundness_tolerance, floor_ball);
+  // true when both are off or the shape cannot be judged.
+  bool beaconShaped(const std::vector<cv::Point>& contour, cv::Size image) const;
 
   ColourBlobConfig config_;
   cv::Mat open_kernel_;   // empty when opening is off

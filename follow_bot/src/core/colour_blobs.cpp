@@ -90,6 +90,17 @@ std::string validate(const ColourBlobConfig& config) {
        }) {
     if (!error.empty()) return error;
   }
+  if (const auto& ball = config.floor_ball) {
+    for (const std::string& error : {
+             requirePositive("floor_ball.radius_m", ball->radius_m),
+             requireInRange("floor_ball.tolerance", ball->tolerance, 0.0, 1.0),
+         }) {
+      if (!error.empty()) return error;
+    }
+    if (const std::string error = validate(ball->camera); !error.empty()) {
+      return "floor_ball.camera: " + error;
+    }
+  }
   return "";
 }
 
@@ -127,6 +138,35 @@ std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Si
   }
   fit.rms_error = std::sqrt(sum_squared / static_cast<double>(arc.size()));
   return fit;
+}
+
+std::optional<double> floorBallRadius(const CameraGeometry& camera, const cv::Point2d& centre,
+                                      double radius_px) {
+  if (!(radius_px > 0.0) || !std::isfinite(centre.x) || !std::isfinite(centre.y)) {
+    return std::nullopt;
+  }
+  // The circle's ends on the line from the principal point through its centre (any line when
+  // the centre is the principal point), as rays of the rectified camera (x right, y down, z
+  // along the optical axis).
+  const cv::Point2d principal(camera.cx, camera.cy);
+  cv::Point2d along = centre - principal;
+  const double offset = cv::norm(along);
+  along = offset > 1e-9 ? along / offset : cv::Point2d(0.0, 1.0);
+  const auto ray = [&](const cv::Point2d& raw) {
+    const cv::Point2d p = rectifyPixel(camera, raw);
+    return cv::normalize(
+        cv::Vec3d((p.x - camera.cx) / camera.fx, (p.y - camera.cy) / camera.fy, 1.0));
+  };
+  const cv::Vec3d near = ray(centre - radius_px * along);
+  const cv::Vec3d far = ray(centre + radius_px * along);
+  const double alpha = 0.5 * std::acos(std::clamp(near.dot(far), -1.0, 1.0));
+  const cv::Vec3d axis = cv::normalize(near + far);
+  const double sin_theta =
+      axis[1] * std::cos(camera.pitch_rad) + axis[2] * std::sin(camera.pitch_rad);
+  const double denominator = 1.0 + sin_theta / std::sin(alpha);
+  if (!(alpha > 0.0) || !(denominator > 0.0)) return std::nullopt;
+  const double radius = camera.height_m / denominator;
+  return std::isfinite(radius) ? std::optional<double>(radius) : std::nullopt;
 }
 
 const ColourBlob* BlobResult::find(const std::string& name) const {
@@ -198,7 +238,7 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
     const std::vector<cv::Point>* largest = nullptr;
     for (const std::vector<cv::Point>& contour : contours) {
       const double area = cv::contourArea(contour);
-      if (area < config_.min_area || !roundEnough(contour, bgr.size())) continue;
+      if (area < config_.min_area || !beaconShaped(contour, bgr.size())) continue;
       ++blob.blob_count;
       if (largest == nullptr || area > blob.area) {
         largest = &contour;
@@ -223,11 +263,20 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
   return result;
 }
 
-bool ColourBlobDetector::roundEnough(const std::vector<cv::Point>& contour, cv::Size image) const {
-  if (config_.roundness_tolerance <= 0.0) return true;
+bool ColourBlobDetector::beaconShaped(const std::vector<cv::Point>& contour, cv::Size image) const {
+  const bool round_gate = config_.roundness_tolerance > 0.0;
+  if (!round_gate && !config_.floor_ball) return true;
   const std::optional<CircleFit> fit = fitCircle(contour, image);
+  if (!fit) return true;
   constexpr double kQuantisationPx = 1.0;
-  return !fit || fit->rms_error <= kQuantisationPx + config_.roundness_tolerance * fit->radius;
+  if (round_gate && fit->rms_error > kQuantisationPx + config_.roundness_tolerance * fit->radius) {
+    return false;
+  }
+  if (!config_.floor_ball) return true;
+  const ColourBlobConfig::FloorBall& ball = *config_.floor_ball;
+  // Boundary pixel centres lie half a pixel inside the silhouette's edge.
+  const std::optional<double> radius = floorBallRadius(ball.camera, fit->centre, fit->radius + 0.5);
+  return radius && std::abs(*radius - ball.radius_m) <= ball.tolerance * ball.radius_m;
 }
 
 cv::Mat ColourBlobDetector::mask(const cv::Mat& bgr, const std::string& name) const {

@@ -70,6 +70,13 @@ BeaconChaserSettings beaconChaserSettings(const BeaconChaserConfig& cfg,
   const bool box_target =
       mode == BeaconMode::kApproach && startup.target.shape == BeaconShape::kBox;
   detector.roundness_tolerance = box_target ? 0.0 : cfg.roundness_tolerance;
+  // Balls rest on the floor: follow mode's are ~ball_radius, an approached sphere is the target.
+  const double ball_radius =
+      mode == BeaconMode::kApproach ? (box_target ? 0.0 : startup.target.size_m) : cfg.ball_radius;
+  if (ball_radius > 0.0) {
+    detector.floor_ball =
+        ColourBlobConfig::FloorBall{ball_radius, cfg.ball_size_tolerance, startup.camera};
+  }
   requireValid({validate(detector)});
 
   BeaconControllerConfig& controller = settings.controller;
