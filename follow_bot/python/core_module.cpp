@@ -368,6 +368,8 @@ void bindBeaconController(py::module_& m) {
       .def_readwrite("max_angular", &Config::max_angular)
       .def_readwrite("distance_tolerance", &Config::distance_tolerance)
       .def_readwrite("bearing_tolerance", &Config::bearing_tolerance)
+      .def_readwrite("distance_release", &Config::distance_release)
+      .def_readwrite("bearing_release", &Config::bearing_release)
       .def_readwrite("lost_hold", &Config::lost_hold);
   defKeywordInit(config, static_cast<Validator<Config>>(&validate));
   m.def("check_colours_detected", &checkColoursDetected, "controller"_a, "detector"_a,
