@@ -5,10 +5,12 @@ poses (with camera_info): every fully visible sphere is labelled with its colour
 centroid lies within 3 px of the silhouette centre the renderer reports; the dumpster's centroid
 within 3 px of its projected outline's; no colour is reported that is not in the frame. Also
 under lighting gain 0.5 and 1.5 and noise sigma 8. The dumpster's frames go to a second node
-configured as its scenario runs it (approach mode, a box target: no roundness gate).
+configured as its scenario runs it (approach mode, a box target: no roundness or size gate).
+Both nodes are mounted as the worlds' camera (~params): the size gate needs it.
 """
 
 import dataclasses
+import math
 import os
 import subprocess
 import threading
@@ -140,10 +142,22 @@ def expectations(world, renderer: Renderer, pose):
     return expected
 
 
+def mounting(world_name: str) -> list[str]:
+    """~params that mount the node's camera as the world's (no tf here): the beacon gate takes
+    only balls that fit one of the beacons' size resting on the floor, seen from that camera."""
+    camera = load_world(WORLDS / f"{world_name}.yaml").camera
+    return [
+        "_camera_mounting:=params",
+        f"_camera_height:={camera.height_m}",
+        f"_camera_pitch_deg:={math.degrees(camera.pitch)}",
+        f"_camera_x_offset:={camera.x_offset_m}",
+    ]
+
+
 # The nodes under test: name -> its ~params. Lab 5's beacons are balls; the dumpster is a box.
 CHASERS = {
-    "beacon_chaser": [],
-    "box_chaser": ["_mode:=approach", "_target_shape:=box"],
+    "beacon_chaser": mounting("rgb"),
+    "box_chaser": [*mounting("dumpster"), "_mode:=approach", "_target_shape:=box"],
 }
 
 
