@@ -99,9 +99,9 @@ class PathLaw : public SteeringLaw {
   // Remembers where a jump from `before` (the band's previous sighting) to `after` begins,
   // when it is a jump forward along a stretch whose heading and curvature fit.
   void startBridge(const PathPoint& before, const cv::Point2d& after, double stamp);
-  // Appends samples of the curve across the remembered jump, if any (none once the sightings
-  // past it are forgotten).
-  void appendBridge(std::vector<cv::Point2d>& positions, std::vector<double>& stamps);
+  // Appends samples of the curves across the remembered jumps, and forgets the jumps whose
+  // sightings past them are all forgotten.
+  void appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps);
   void forgetStalePoints(double stamp);
   void remember(const LineMeasurement& measurement, double stamp);
   // Stores the band's ground point unless it repeats the band's latest; false when the
@@ -113,7 +113,7 @@ class PathLaw : public SteeringLaw {
   CameraGeometry camera_;
   PdLaw fallback_;
   std::deque<PathPoint> points_;
-  std::optional<BridgeStart> bridge_;
+  std::deque<BridgeStart> bridges_;  // oldest first
   PathState path_state_;
   bool following_ = false;
   bool has_stamp_ = false;

@@ -308,7 +308,7 @@ PathLaw::PathLaw(const SteeringConfig& config, const CameraGeometry& camera)
 void PathLaw::reset() {
   fallback_.reset();
   points_.clear();
-  bridge_.reset();
+  bridges_.clear();
   path_state_ = PathState();
   following_ = false;
   has_stamp_ = false;
@@ -343,7 +343,7 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     positions.push_back(point.position);
     stamps.push_back(point.stamp);
   }
-  appendBridge(positions, stamps);
+  appendBridges(positions, stamps);
   path_state_ = PathState();
   const std::optional<double> pursuit = pursuitCurvature(positions, config_.path.start_lookahead);
   std::optional<double> curvature = pursuit;
@@ -369,7 +369,7 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     // Nothing left ahead: the fallback's lost-line search takes over, and whatever is seen
     // next starts a fresh path.
     points_.clear();
-    bridge_.reset();
+    bridges_.clear();
     path_state_.points = 0;
     return fallback_.step(frame);
   }
@@ -385,7 +385,7 @@ void PathLaw::moveMemory(const Twist2D& applied, double dt) {
   const double turn = applied.angular * dt;
   if (dt > config_.path.max_frame_gap || !std::isfinite(distance) || !std::isfinite(turn)) {
     points_.clear();
-    bridge_.reset();
+    bridges_.clear();
     return;
   }
   // The robot's displacement over the exact arc, in the previous base frame.
@@ -403,9 +403,9 @@ void PathLaw::moveMemory(const Twist2D& applied, double dt) {
     return cv::Point2d(cos_turn * d.x + sin_turn * d.y, -sin_turn * d.x + cos_turn * d.y);
   };
   for (PathPoint& point : points_) point.position = rotate(point.position - displacement);
-  if (bridge_) {
-    bridge_->position = rotate(bridge_->position - displacement);
-    bridge_->tangent = rotate(bridge_->tangent);
+  for (BridgeStart& bridge : bridges_) {
+    bridge.position = rotate(bridge.position - displacement);
+    bridge.tangent = rotate(bridge.tangent);
   }
 }
 
@@ -453,7 +453,6 @@ bool PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double 
 }
 
 void PathLaw::startBridge(const PathPoint& before, const cv::Point2d& after, double stamp) {
-  bridge_.reset();
   std::vector<cv::Point2d> positions;
   std::vector<double> stamps;
   for (const PathPoint& point : points_) {
@@ -461,38 +460,45 @@ void PathLaw::startBridge(const PathPoint& before, const cv::Point2d& after, dou
     positions.push_back(point.position);
     stamps.push_back(point.stamp);
   }
+  appendBridges(positions, stamps);  // the stretch before may be short and end an earlier jump
   const std::optional<PathDirection> start =
       directionAt(before.position, positions, stamps, config_.path);
   // A jump backwards or sideways is not the line continuing.
   if (!start || (after - before.position).dot(start->tangent) <= 0.0) return;
-  bridge_ = BridgeStart{before.position, start->tangent, start->curvature, before.stamp, stamp};
+  bridges_.push_back(
+      BridgeStart{before.position, start->tangent, start->curvature, before.stamp, stamp});
 }
 
-void PathLaw::appendBridge(std::vector<cv::Point2d>& positions, std::vector<double>& stamps) {
-  if (!bridge_) return;
-  std::vector<cv::Point2d> past;  // the band's sightings past the jump, oldest first
-  std::vector<double> past_stamps;
-  for (const PathPoint& point : points_) {
-    if (point.look_ahead || point.stamp < bridge_->end_stamp) continue;
-    past.push_back(point.position);
-    past_stamps.push_back(point.stamp);
+void PathLaw::appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps) {
+  const size_t first_sample = positions.size();
+  for (auto bridge = bridges_.begin(); bridge != bridges_.end();) {
+    // The band's sightings past the jump up to the next one, oldest first.
+    const auto next = std::next(bridge);
+    std::vector<cv::Point2d> past;
+    std::vector<double> past_stamps;
+    for (const PathPoint& point : points_) {
+      if (point.look_ahead || point.stamp < bridge->end_stamp) continue;
+      if (next != bridges_.end() && point.stamp > next->stamp) break;
+      past.push_back(point.position);
+      past_stamps.push_back(point.stamp);
+    }
+    if (past.empty()) {  // forgotten: the bridge lies behind the base
+      bridge = bridges_.erase(bridge);
+      continue;
+    }
+    const PathDirection start{bridge->tangent, bridge->curvature};
+    // Too few sightings past the jump for a direction yet: the single arc through the first.
+    std::optional<cv::Point2d> end_tangent;
+    if (const std::optional<PathDirection> end =
+            directionAt(past.front(), past, past_stamps, config_.path)) {
+      end_tangent = end->tangent;
+    }
+    sampleBridge(bridge->position, start, bridge->stamp, past.front(), end_tangent,
+                 past_stamps.front(), positions, stamps);
+    ++bridge;
   }
-  if (past.empty()) {
-    bridge_.reset();
-    return;
-  }
-  const PathDirection start{bridge_->tangent, bridge_->curvature};
-  // Too few sightings past the jump for a direction yet: the single arc through the first.
-  std::optional<cv::Point2d> end_tangent;
-  if (const std::optional<PathDirection> end =
-          directionAt(past.front(), past, past_stamps, config_.path)) {
-    end_tangent = end->tangent;
-  }
-  const size_t before = positions.size();
-  sampleBridge(bridge_->position, start, bridge_->stamp, past.front(), end_tangent,
-               past_stamps.front(), positions, stamps);
   // Samples behind the base are forgotten as sightings would be.
-  for (size_t i = positions.size(); i-- > before;) {
+  for (size_t i = positions.size(); i-- > first_sample;) {
     if (positions[i].x < -config_.path.keep_behind || !isFinite(positions[i])) {
       positions.erase(positions.begin() + i);
       stamps.erase(stamps.begin() + i);
