@@ -496,6 +496,7 @@ void bindSteering(py::module_& m) {
       .def_readwrite("max_point_age", &PathConfig::max_point_age)
       .def_readwrite("max_points", &PathConfig::max_points)
       .def_readwrite("min_point_spacing", &PathConfig::min_point_spacing)
+      .def_readwrite("bridge_gap", &PathConfig::bridge_gap)
       .def_readwrite("max_frame_gap", &PathConfig::max_frame_gap);
   defKeywordInit(path);
 

@@ -13,12 +13,22 @@
 // offset: d'' + heading_gain d' + lateral_gain d = 0 in distance travelled (' = d/ds),
 // independent of speed.
 //
+// Where the camera never saw the line (its nearest floor lies beyond the end of a tight curve,
+// or the paint has a gap) successive sightings of the band jump by bridge_gap or more. The end
+// of the stretch before the jump is then remembered with its heading and curvature, and every
+// frame the jump is bridged by two arcs: that stretch's own curve continued, then the arc that
+// meets the first sighting past the jump along the heading fitted to the sightings there (a
+// single arc while they are too few for a heading). A curve that ends unseen and runs into a
+// straight or another curve is bridged exactly. The law tracks the bridge like any remembered
+// stretch.
+//
 // The remembered path is only as good as the dead reckoning: exact when the robot executes the
 // commands it is sent (as the harness simulator does), but a robot turning 5 % more or less
 // than commanded runs about 1 cm off a 0.6 m radius curve.
 #pragma once
 
 #include <deque>
+#include <optional>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -76,7 +86,22 @@ class PathLaw : public SteeringLaw {
     bool look_ahead = false;
   };
 
+  // The end of a remembered stretch where a jump of bridge_gap or more begins, in base_link.
+  struct BridgeStart {
+    cv::Point2d position;
+    cv::Point2d tangent;     // unit, the direction the path runs
+    double curvature = 0.0;  // 1/m, + = left
+    double stamp = 0.0;      // frame it was seen in
+    double end_stamp = 0.0;  // frame of the first sighting past the jump
+  };
+
   void moveMemory(const Twist2D& applied, double dt);
+  // Remembers where a jump from `before` (the band's previous sighting) to `after` begins,
+  // when it is a jump forward along a stretch whose heading and curvature fit.
+  void startBridge(const PathPoint& before, const cv::Point2d& after, double stamp);
+  // Appends samples of the curves across the remembered jumps, and forgets the jumps whose
+  // sightings past them are all forgotten.
+  void appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps);
   void forgetStalePoints(double stamp);
   void remember(const LineMeasurement& measurement, double stamp);
   // Stores the band's ground point unless it repeats the band's latest; false when the
@@ -88,6 +113,7 @@ class PathLaw : public SteeringLaw {
   CameraGeometry camera_;
   PdLaw fallback_;
   std::deque<PathPoint> points_;
+  std::deque<BridgeStart> bridges_;  // oldest first
   PathState path_state_;
   bool following_ = false;
   bool has_stamp_ = false;

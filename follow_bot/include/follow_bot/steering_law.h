@@ -89,6 +89,11 @@ struct PathConfig {
   double max_point_age = 10.0;       // s; older points are forgotten (odometry drifts)
   int max_points = 1000;             // oldest points are forgotten beyond this count
   double min_point_spacing = 0.002;  // m; closer sightings in the same band are not stored
+  // m; a jump at least this long between successive sightings of the near band is a stretch
+  // of line the camera never saw (the end of a curve tighter than the nearest floor it sees,
+  // a gap in the paint): the remembered path bridges it with a curve (line_path.h). Shorter
+  // jumps are within the fit's reach.
+  double bridge_gap = 0.1;
   // s; a longer interval between frames makes the dead reckoning too uncertain, so the memory
   // is cleared.
   double max_frame_gap = 0.5;

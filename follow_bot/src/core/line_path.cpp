@@ -162,6 +162,137 @@ std::optional<double> pursuitCurvature(const std::vector<cv::Point2d>& positions
   return curvature;
 }
 
+// The path's direction and curvature at `at`, fitted to the points around it.
+struct PathDirection {
+  cv::Point2d tangent;  // unit
+  double curvature = 0.0;
+};
+std::optional<PathDirection> directionAt(const cv::Point2d& at,
+                                         const std::vector<cv::Point2d>& positions,
+                                         const std::vector<double>& stamps,
+                                         const PathConfig& config) {
+  std::vector<cv::Point2d> shifted;
+  shifted.reserve(positions.size());
+  for (const cv::Point2d& p : positions) shifted.push_back(p - at);
+  const std::optional<PathAtBase> path =
+      fitPathAtBase(shifted, stamps, config.fit_length, config.max_extrapolation);
+  if (!path) return std::nullopt;
+  return PathDirection{{std::cos(path->heading), std::sin(path->heading)}, path->curvature};
+}
+
+// Spacing of the samples along a bridge: about the sightings' own at the default speed, so the
+// fit weighs a bridged stretch like a seen one.
+constexpr double kBridgeSampleSpacing = 0.01;
+
+// The end of the arc of curvature `curvature` that leaves `from` along unit `tangent` and runs
+// for `length`, and its tangent there.
+std::pair<cv::Point2d, cv::Point2d> alongArc(const cv::Point2d& from, const cv::Point2d& tangent,
+                                             double curvature, double length) {
+  const double turn = curvature * length;
+  const cv::Point2d left(-tangent.y, tangent.x);
+  // sin(turn) / curvature and (1 - cos(turn)) / curvature, by their series near a straight.
+  const bool straight = std::abs(turn) < kSmallTurnRad;
+  const double ahead = straight ? length : std::sin(turn) / curvature;
+  const double aside = straight ? 0.5 * length * turn : (1.0 - std::cos(turn)) / curvature;
+  return {from + ahead * tangent + aside * left, std::cos(turn) * tangent + std::sin(turn) * left};
+}
+
+// Appends points about kBridgeSampleSpacing apart along the arc (curvature, length) from
+// `from`, excluding `from` itself, with stamps interpolated from `from_stamp` at a rate per
+// metre of `stamp_rate`.
+void sampleArc(const cv::Point2d& from, const cv::Point2d& tangent, double curvature, double length,
+               double from_stamp, double stamp_rate, std::vector<cv::Point2d>& positions,
+               std::vector<double>& stamps) {
+  const int samples = static_cast<int>(std::ceil(length / kBridgeSampleSpacing));
+  for (int i = 1; i <= samples; ++i) {
+    const double run = length * i / samples;
+    positions.push_back(alongArc(from, tangent, curvature, run).first);
+    stamps.push_back(from_stamp + stamp_rate * run);
+  }
+}
+
+// The bridge from `from` (tangent and curvature `start`) to `to`: the remembered stretch's own
+// arc continued, then the arc that reaches `to` along `end_tangent`, the first arc as short as
+// that allows (a curve that ends where the camera lost it, then the next segment: exact for a
+// curve running into a straight or into another curve). Without `end_tangent`, or when no
+// such pair of arcs exists, the single arc from `from` through `to`. Appends the samples
+// (without `from`; with `to`) and stamps interpolated between the ends'.
+void sampleBridge(const cv::Point2d& from, const PathDirection& start, double from_stamp,
+                  const cv::Point2d& to, const std::optional<cv::Point2d>& end_tangent,
+                  double to_stamp, std::vector<cv::Point2d>& positions,
+                  std::vector<double>& stamps) {
+  // The arc from `at` along `tangent` through `to`: its curvature, length and end tangent.
+  struct Arc {
+    double curvature = 0.0;
+    double length = 0.0;
+    cv::Point2d end_tangent;
+  };
+  const auto arcTo = [&](const cv::Point2d& at, const cv::Point2d& tangent) -> std::optional<Arc> {
+    const cv::Point2d chord = to - at;
+    const double distance = std::sqrt(chord.dot(chord));
+    if (!(distance > 0.0) || chord.dot(tangent) <= 0.0) return std::nullopt;
+    const cv::Point2d unit = chord * (1.0 / distance);
+    const double sine = tangent.x * unit.y - tangent.y * unit.x;  // of the angle to the chord
+    const double half_turn = std::asin(std::clamp(sine, -1.0, 1.0));
+    const double length =
+        std::abs(half_turn) < kSmallTurnRad ? distance : distance * half_turn / sine;
+    return Arc{2.0 * sine / distance, length, 2.0 * tangent.dot(unit) * unit - tangent};
+  };
+  const auto mismatch = [&](const Arc& arc) {  // rad, from the arc's end tangent to end_tangent
+    const cv::Point2d& t = arc.end_tangent;
+    return std::atan2(t.x * end_tangent->y - t.y * end_tangent->x, t.dot(*end_tangent));
+  };
+  const cv::Point2d chord = to - from;
+  const double distance = std::sqrt(chord.dot(chord));
+
+  // The first arc's length: the smallest root of the end tangents' mismatch, bracketed on a
+  // grid over the chord's length and refined by bisection.
+  double first_length = 0.0;
+  if (end_tangent) {
+    constexpr int kGrid = 64;
+    constexpr int kBisections = 30;
+    const auto mismatchAfter = [&](double length) -> std::optional<double> {
+      const auto [at, tangent] = alongArc(from, start.tangent, start.curvature, length);
+      const std::optional<Arc> arc = arcTo(at, tangent);
+      if (!arc) return std::nullopt;
+      return mismatch(*arc);
+    };
+    std::optional<double> previous = mismatchAfter(0.0);
+    for (int i = 1; i <= kGrid && previous; ++i) {
+      double high = distance * i / kGrid;
+      const std::optional<double> current = mismatchAfter(high);
+      if (!current) break;
+      // A sign change through zero, not across +-pi.
+      if (*previous * *current <= 0.0 && std::abs(*previous - *current) < CV_PI) {
+        double low = distance * (i - 1) / kGrid;
+        double low_value = *previous;
+        for (int b = 0; b < kBisections; ++b) {
+          const double middle = 0.5 * (low + high);
+          const std::optional<double> value = mismatchAfter(middle);
+          if (!value) break;
+          if (low_value * *value <= 0.0) {
+            high = middle;
+          } else {
+            low = middle;
+            low_value = *value;
+          }
+        }
+        first_length = high;
+        break;
+      }
+      previous = current;
+    }
+  }
+  const auto [joint, joint_tangent] = alongArc(from, start.tangent, start.curvature, first_length);
+  const std::optional<Arc> second = arcTo(joint, joint_tangent);
+  if (!second) return;
+  const double stamp_rate = (to_stamp - from_stamp) / (first_length + second->length);
+  sampleArc(from, start.tangent, start.curvature, first_length, from_stamp, stamp_rate, positions,
+            stamps);
+  sampleArc(joint, joint_tangent, second->curvature, second->length,
+            from_stamp + stamp_rate * first_length, stamp_rate, positions, stamps);
+}
+
 const SteeringConfig& validated(const SteeringConfig& config, const CameraGeometry& camera) {
   std::string error = validate(config);
   if (error.empty()) error = validate(camera);
@@ -177,6 +308,7 @@ PathLaw::PathLaw(const SteeringConfig& config, const CameraGeometry& camera)
 void PathLaw::reset() {
   fallback_.reset();
   points_.clear();
+  bridges_.clear();
   path_state_ = PathState();
   following_ = false;
   has_stamp_ = false;
@@ -211,6 +343,7 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     positions.push_back(point.position);
     stamps.push_back(point.stamp);
   }
+  appendBridges(positions, stamps);
   path_state_ = PathState();
   const std::optional<double> pursuit = pursuitCurvature(positions, config_.path.start_lookahead);
   std::optional<double> curvature = pursuit;
@@ -236,6 +369,7 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     // Nothing left ahead: the fallback's lost-line search takes over, and whatever is seen
     // next starts a fresh path.
     points_.clear();
+    bridges_.clear();
     path_state_.points = 0;
     return fallback_.step(frame);
   }
@@ -251,6 +385,7 @@ void PathLaw::moveMemory(const Twist2D& applied, double dt) {
   const double turn = applied.angular * dt;
   if (dt > config_.path.max_frame_gap || !std::isfinite(distance) || !std::isfinite(turn)) {
     points_.clear();
+    bridges_.clear();
     return;
   }
   // The robot's displacement over the exact arc, in the previous base frame.
@@ -264,9 +399,13 @@ void PathLaw::moveMemory(const Twist2D& applied, double dt) {
   // Points stay put in the world, so in the new frame they move by the inverse motion.
   const double cos_turn = std::cos(turn);
   const double sin_turn = std::sin(turn);
-  for (PathPoint& point : points_) {
-    const cv::Point2d d = point.position - displacement;
-    point.position = cv::Point2d(cos_turn * d.x + sin_turn * d.y, -sin_turn * d.x + cos_turn * d.y);
+  const auto rotate = [&](const cv::Point2d& d) {
+    return cv::Point2d(cos_turn * d.x + sin_turn * d.y, -sin_turn * d.x + cos_turn * d.y);
+  };
+  for (PathPoint& point : points_) point.position = rotate(point.position - displacement);
+  for (BridgeStart& bridge : bridges_) {
+    bridge.position = rotate(bridge.position - displacement);
+    bridge.tangent = rotate(bridge.tangent);
   }
 }
 
@@ -306,9 +445,65 @@ bool PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double 
     const cv::Point2d step = *ground - latest_of_band->position;
     const double spacing = config_.path.min_point_spacing;
     if (step.dot(step) < spacing * spacing) return true;
+    const double gap = config_.path.bridge_gap;
+    if (!look_ahead && step.dot(step) >= gap * gap) startBridge(*latest_of_band, *ground, stamp);
   }
   points_.push_back(PathPoint{*ground, stamp, look_ahead});
   return true;
+}
+
+void PathLaw::startBridge(const PathPoint& before, const cv::Point2d& after, double stamp) {
+  std::vector<cv::Point2d> positions;
+  std::vector<double> stamps;
+  for (const PathPoint& point : points_) {
+    if (point.look_ahead || point.stamp > before.stamp) continue;
+    positions.push_back(point.position);
+    stamps.push_back(point.stamp);
+  }
+  appendBridges(positions, stamps);  // the stretch before may be short and end an earlier jump
+  const std::optional<PathDirection> start =
+      directionAt(before.position, positions, stamps, config_.path);
+  // A jump backwards or sideways is not the line continuing.
+  if (!start || (after - before.position).dot(start->tangent) <= 0.0) return;
+  bridges_.push_back(
+      BridgeStart{before.position, start->tangent, start->curvature, before.stamp, stamp});
+}
+
+void PathLaw::appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps) {
+  const size_t first_sample = positions.size();
+  for (auto bridge = bridges_.begin(); bridge != bridges_.end();) {
+    // The band's sightings past the jump up to the next one, oldest first.
+    const auto next = std::next(bridge);
+    std::vector<cv::Point2d> past;
+    std::vector<double> past_stamps;
+    for (const PathPoint& point : points_) {
+      if (point.look_ahead || point.stamp < bridge->end_stamp) continue;
+      if (next != bridges_.end() && point.stamp > next->stamp) break;
+      past.push_back(point.position);
+      past_stamps.push_back(point.stamp);
+    }
+    if (past.empty()) {  // forgotten: the bridge lies behind the base
+      bridge = bridges_.erase(bridge);
+      continue;
+    }
+    const PathDirection start{bridge->tangent, bridge->curvature};
+    // Too few sightings past the jump for a direction yet: the single arc through the first.
+    std::optional<cv::Point2d> end_tangent;
+    if (const std::optional<PathDirection> end =
+            directionAt(past.front(), past, past_stamps, config_.path)) {
+      end_tangent = end->tangent;
+    }
+    sampleBridge(bridge->position, start, bridge->stamp, past.front(), end_tangent,
+                 past_stamps.front(), positions, stamps);
+    ++bridge;
+  }
+  // Samples behind the base are forgotten as sightings would be.
+  for (size_t i = positions.size(); i-- > first_sample;) {
+    if (positions[i].x < -config_.path.keep_behind || !isFinite(positions[i])) {
+      positions.erase(positions.begin() + i);
+      stamps.erase(stamps.begin() + i);
+    }
+  }
 }
 
 Twist2D PathLaw::drive(double curvature) const {

@@ -83,6 +83,7 @@ std::string validate(const SteeringConfig& c) {
            requirePositive("max_point_age", path.max_point_age),
            requireAtLeast("max_points", path.max_points, 3),
            requireAtLeast("min_point_spacing", path.min_point_spacing, 0.0),
+           requirePositive("bridge_gap", path.bridge_gap),
            requirePositive("max_frame_gap", path.max_frame_gap),
        }) {
     if (!error.empty()) return error;
