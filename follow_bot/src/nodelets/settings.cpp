@@ -161,7 +161,7 @@ ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeome
   return config;
 }
 
-PanoramaSettings panoramaSettings(const PanoramaConfig& cfg) {
+PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg) {
   requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,
                 "~step_angle_deg must be at most ~total_angle_deg", cfg.step_angle_deg,
                 cfg.total_angle_deg);
@@ -170,7 +170,7 @@ PanoramaSettings panoramaSettings(const PanoramaConfig& cfg) {
   requireLinked(cfg.yaw_tolerance_deg < cfg.step_angle_deg / 2.0,
                 "~yaw_tolerance_deg must be below ~step_angle_deg / 2", cfg.yaw_tolerance_deg,
                 cfg.step_angle_deg);
-  PanoramaSettings settings;
+  PanoramaSessionConfig settings;
   PanoramaCaptureConfig& capture = settings.capture;
   capture.total_angle = cfg.total_angle_deg * M_PI / 180.0;
   capture.step_angle = cfg.step_angle_deg * M_PI / 180.0;

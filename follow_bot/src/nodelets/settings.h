@@ -16,8 +16,7 @@
 #include "follow_bot/colour_blobs.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot/marker_target.h"
-#include "follow_bot/panorama_capture.h"
-#include "follow_bot/panorama_stitch.h"
+#include "follow_bot/panorama_session.h"
 #include "follow_bot/parking_servo.h"
 #include "follow_bot/steering_law.h"
 
@@ -43,13 +42,6 @@ BeaconControllerConfig beaconStartupConfig(const ros::NodeHandle& pnh);
 std::unique_ptr<MarkerDetector> makeMarkerDetector(const ParkerConfig& cfg);
 ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeometry& camera);
 
-struct PanoramaSettings {
-  PanoramaCaptureConfig capture;
-  image_converter::MatchOptions match;
-  StitchMethod method = StitchMethod::kAuto;
-  double frame_timeout = 0.0;    // s, wall time
-  double capture_timeout = 0.0;  // s, ROS time
-};
-PanoramaSettings panoramaSettings(const PanoramaConfig& cfg);
+PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg);
 
 }  // namespace follow_bot
