@@ -27,7 +27,8 @@ endfunction()
 # generate_cfg_defaults(CFG...): for each dynamic_reconfigure cfg/<Name>.cfg of the calling
 # package, the ROS-free header <package>/<Name>Defaults.h (struct <Name>Defaults: the .cfg's
 # defaults as constexpr members) in the devel include directory, installed; built by the target
-# <package>_cfg_defaults, which the cores that include the headers depend on.
+# <package>_cfg_defaults, which the cores that include the headers depend on (and, exported,
+# those of the packages that use this one: call it before catkin_package()).
 function(generate_cfg_defaults)
   set(headers)
   foreach(cfg ${ARGN})
@@ -42,6 +43,9 @@ function(generate_cfg_defaults)
     list(APPEND headers ${header})
   endforeach()
   add_custom_target(${PROJECT_NAME}_cfg_defaults ALL DEPENDS ${headers})
+  # For the packages whose code includes the headers too (catkin_EXPORTED_TARGETS).
+  set(${PROJECT_NAME}_EXPORTED_TARGETS ${${PROJECT_NAME}_EXPORTED_TARGETS}
+    ${PROJECT_NAME}_cfg_defaults PARENT_SCOPE)
   install(FILES ${headers} DESTINATION ${CATKIN_PACKAGE_INCLUDE_DESTINATION})
 endfunction()
 

@@ -29,8 +29,12 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
                           /*debug_image=*/false}) {}
 
  private:
+  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const PanoramaConfig&) override {
+    matching_ = readConfig<image_converter::MatchingConfig>(pnh);  // image_converter's ~params
+  }
+
   void configure(const PanoramaConfig& config) override {
-    session_ = std::make_unique<PanoramaSession>(panoramaSettings(config));
+    session_ = std::make_unique<PanoramaSession>(panoramaSettings(config, matching_));
   }
 
   void advertise(ros::NodeHandle& nh, ros::NodeHandle& pnh) override {
@@ -97,6 +101,7 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
     panorama_pub_.publish(cv_bridge::CvImage(frame.header, "bgr8", stitched.panorama).toImageMsg());
   }
 
+  image_converter::MatchingConfig matching_;
   std::unique_ptr<PanoramaSession> session_;
   ros::Publisher panorama_pub_;
   ros::Subscriber odom_sub_;

@@ -161,7 +161,8 @@ ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeome
   return config;
 }
 
-PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg) {
+PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg,
+                                       const image_converter::MatchingConfig& matching) {
   requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,
                 "~step_angle_deg must be at most ~total_angle_deg", cfg.step_angle_deg,
                 cfg.total_angle_deg);
@@ -182,14 +183,14 @@ PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg) {
   capture.return_to_start = cfg.return_to_start;
 
   settings.match.detector = parseChoice(
-      "detector", cfg.detector,
+      "detector", matching.detector,
       [](const std::string& name) {
         image_converter::Detector detector;
         return image_converter::parseDetector(name, detector) ? std::optional(detector)
                                                               : std::nullopt;
       },
       "orb or sift");
-  settings.match.min_inliers = cfg.min_inliers;
+  settings.match.min_inliers = matching.min_inliers;
   settings.method = parseChoice("stitch_method", cfg.stitch_method, parseStitchMethod,
                                 "auto, features or rotation");
   settings.frame_timeout = cfg.frame_timeout;

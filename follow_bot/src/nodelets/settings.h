@@ -19,6 +19,7 @@
 #include "follow_bot/panorama_session.h"
 #include "follow_bot/parking_servo.h"
 #include "follow_bot/steering_law.h"
+#include "image_converter/MatchingConfig.h"
 
 namespace follow_bot {
 
@@ -42,6 +43,8 @@ BeaconControllerConfig beaconStartupConfig(const ros::NodeHandle& pnh);
 std::unique_ptr<MarkerDetector> makeMarkerDetector(const ParkerConfig& cfg);
 ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeometry& camera);
 
-PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg);
+// With the feature matching's ~params (image_converter's cfg/Matching.cfg).
+PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg,
+                                       const image_converter::MatchingConfig& matching);
 
 }  // namespace follow_bot
