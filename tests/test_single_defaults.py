@@ -27,7 +27,13 @@ GENERATED = {
         "follow_bot/include/follow_bot/steering_law.h",
     ],
     "follow_bot/cfg/Parker.cfg": ["follow_bot/include/follow_bot/parking_servo.h"],
-    "follow_bot/cfg/Panorama.cfg": ["follow_bot/include/follow_bot/panorama_capture.h"],
+    "follow_bot/cfg/Panorama.cfg": [
+        "follow_bot/include/follow_bot/panorama_capture.h",
+        "follow_bot/include/follow_bot/panorama_session.h",
+    ],
+    "image_converter/cfg/Matching.cfg": [
+        "image_converter/include/image_converter/feature_matching.h"
+    ],
 }
 # Core fields that hold a .cfg parameter under another name (or type): header -> field -> the
 # <Name>Defaults member its initialiser must name.
@@ -67,11 +73,16 @@ PARAM_FALLBACK = re.compile(
     r"""(?:[pP]aram(?:<[\w:]+>)?|get_param)\(\s*(?:\w+,\s*)?"~?(\w+)",\s*([^,)]+)"""
 )
 
-CONFIG_STRUCT = re.compile(r"^struct \w*Config \{\n(.*?)^\};", re.M | re.S)
+CONFIG_STRUCT = re.compile(r"^struct \w*(?:Config|Options) \{\n(.*?)^\};", re.M | re.S)
 LITERAL_INITIALISER = re.compile(
     r"^\s*(?:double|float|int|bool|std::string)\s+(\w+)\s*=\s*"
     r"(?:-?[\d.]+(?:e-?\d+)?|true|false|\".*\")\s*;",
     re.M,
+)
+
+LITERAL_VALUE = re.compile(
+    r"^\s*(?:double|float|int|bool|std::string)\s+(?P<name>\w+)\s*=\s*"
+    r"(?P<value>-?[\d.]+(?:e-?\d+)?|true|false|\".*\")\s*;"
 )
 
 
@@ -140,6 +151,24 @@ def test_renamed_core_fields_take_the_generated_default(header):
         initialiser = re.search(rf"^\s*[\w:<>]+\s+{field}\s*=\s*([^;]+);", text, re.M)
         assert initialiser, f"{header}: no initialiser of {field}"
         assert default in initialiser[1], f"{header}: {field} = {initialiser[1]}"
+
+
+def test_no_core_config_repeats_a_cfg_default_under_its_name():
+    """Whatever the package: a Config or Options member named as a .cfg parameter, with that
+    parameter's default as a literal, writes the default a second time (MatchOptions'
+    `int min_inliers = 25;` next to a .cfg's min_inliers 25)."""
+    known = defaults()
+    repeats = []
+    for header in sorted(REPO.glob("*/include/**/*.h")):
+        for body in CONFIG_STRUCT.findall(header.read_text()):
+            for line in body.splitlines():
+                initialiser = LITERAL_VALUE.match(line)
+                if not initialiser or initialiser["name"] not in known:
+                    continue
+                value = initialiser["value"].strip('"')
+                if any(same(value, d) for d in known[initialiser["name"]]):
+                    repeats.append(f"{header.relative_to(REPO)}: {line.strip()}")
+    assert repeats == []
 
 
 def test_code_reads_no_cfg_parameter_with_a_literal_fallback():

@@ -2,6 +2,8 @@
 // a smooth image, format strings match the upstream plugin's, malformed payloads are errors.
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include <opencv2/imgproc.hpp>
 
 #include "compressed_transport/codec.h"
@@ -33,34 +35,32 @@ EncoderConfig png() {
   return config;
 }
 
-TEST(Codec, PngRoundTripIsExact) {
-  const cv::Mat image = ramp();
-  const Encoded encoded = encode(image, "bgr8", png());
-  EXPECT_EQ(encoded.format, "bgr8; png compressed bgr8");
+// `image` (`encoding`) through PNG: the format string is `format`, and it decodes to the same
+// encoding and the same pixels.
+void expectExactPngRoundTrip(const cv::Mat& image, const std::string& encoding,
+                             const std::string& format) {
+  const Encoded encoded = encode(image, encoding, png());
+  EXPECT_EQ(encoded.format, format);
   const Decoded decoded = decode(encoded.data, encoded.format);
   ASSERT_EQ(decoded.error, "");
-  EXPECT_EQ(decoded.encoding, "bgr8");
+  EXPECT_EQ(decoded.encoding, encoding);
   EXPECT_EQ(cv::norm(decoded.image, image, cv::NORM_INF), 0.0);
+}
+
+TEST(Codec, PngRoundTripIsExact) {
+  expectExactPngRoundTrip(ramp(), "bgr8", "bgr8; png compressed bgr8");
 }
 
 TEST(Codec, RgbComesBackAsRgb) {
   cv::Mat rgb;
   cv::cvtColor(ramp(), rgb, cv::COLOR_BGR2RGB);
-  const Encoded encoded = encode(rgb, "rgb8", png());
-  EXPECT_EQ(encoded.format, "rgb8; png compressed bgr8");
-  const Decoded decoded = decode(encoded.data, encoded.format);
-  EXPECT_EQ(decoded.encoding, "rgb8");
-  EXPECT_EQ(cv::norm(decoded.image, rgb, cv::NORM_INF), 0.0);
+  expectExactPngRoundTrip(rgb, "rgb8", "rgb8; png compressed bgr8");
 }
 
 TEST(Codec, Mono16PngIsExact) {
   cv::Mat depth(10, 12, CV_16UC1);
   cv::randu(depth, 0, 65535);
-  const Encoded encoded = encode(depth, "mono16", png());
-  EXPECT_EQ(encoded.format, "mono16; png compressed ");
-  const Decoded decoded = decode(encoded.data, encoded.format);
-  EXPECT_EQ(decoded.encoding, "mono16");
-  EXPECT_EQ(cv::norm(decoded.image, depth, cv::NORM_INF), 0.0);
+  expectExactPngRoundTrip(depth, "mono16", "mono16; png compressed ");
 }
 
 TEST(Codec, JpegQualitySetsTheError) {

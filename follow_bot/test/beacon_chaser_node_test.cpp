@@ -72,10 +72,16 @@ class BeaconChaserNode : public ::testing::Test {
 
   // Spins for `wait` wall seconds and returns the commands received so far.
   std::vector<geometry_msgs::Twist> spinFor(double wait) {
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait);
-    while (ros::WallTime::now() < deadline) {
+    return spinUntil([] { return false; }, wait);
+  }
+
+  // Spins until `done()` or for `timeout` seconds of wall time; returns the answers so far.
+  template <typename Done>
+  std::vector<geometry_msgs::Twist> spinUntil(Done done, double timeout) {
+    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);
+    while (!done() && ros::WallTime::now() < deadline) {
       ros::spinOnce();
-      ros::WallDuration(0.002).sleep();
+      ros::WallDuration(0.001).sleep();
     }
     return received_;
   }
@@ -95,11 +101,7 @@ class BeaconChaserNode : public ::testing::Test {
                                                  double grace = 0.03) {
     received_.clear();
     chaser.images.publish(msg);
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(10.0);
-    while (received_.empty() && ros::WallTime::now() < deadline) {
-      ros::spinOnce();
-      ros::WallDuration(0.001).sleep();
-    }
+    spinUntil([this] { return !received_.empty(); }, 10.0);
     return spinFor(grace);
   }
 

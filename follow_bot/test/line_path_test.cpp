@@ -12,10 +12,11 @@
 #include <tuple>
 #include <vector>
 
+#include "follow_bot_common/testing/harness_camera.h"
+
 namespace follow_bot {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kFrameDt = 1.0 / 30.0;
@@ -23,33 +24,6 @@ constexpr int kWidth = 640;
 constexpr int kHeight = 480;
 constexpr double kBandRow = 369.5;       // centroid row of the lecture band, rows 360..379
 constexpr double kLookAheadRow = 273.5;  // the default look-ahead band, rows 264..283
-
-double degrees(double deg) { return deg * kPi / 180.0; }
-
-CameraGeometry harnessCamera() {
-  CameraGeometry camera;
-  camera.fx = camera.fy = 554.256;
-  camera.cx = 320.0;
-  camera.cy = 240.0;
-  camera.height_m = 0.3;
-  camera.pitch_rad = degrees(20.0);
-  camera.x_offset_m = 0.0;
-  return camera;
-}
-
-// The forward camera model, written independently of pixelToGround: a floor point in
-// base_link to (u, v); empty behind the camera.
-std::optional<cv::Point2d> projectToPixel(const CameraGeometry& camera, const cv::Point2d& p) {
-  const double pitch = camera.pitch_rad;
-  const cv::Vec3d z_axis(std::cos(pitch), 0.0, -std::sin(pitch));
-  const cv::Vec3d x_axis(0.0, -1.0, 0.0);
-  const cv::Vec3d y_axis = z_axis.cross(x_axis);
-  const cv::Vec3d from_camera(p.x - camera.x_offset_m, p.y, -camera.height_m);
-  const double depth = from_camera.dot(z_axis);
-  if (depth <= 1e-6) return std::nullopt;
-  return cv::Point2d(camera.cx + camera.fx * from_camera.dot(x_axis) / depth,
-                     camera.cy + camera.fy * from_camera.dot(y_axis) / depth);
-}
 
 struct Pose {
   double x = 0.0;
@@ -123,7 +97,9 @@ class Course {
                                    size_t robot_index, double row = kBandRow) const {
     std::optional<cv::Point2d> previous;
     for (size_t i = robot_index; i < std::min(points_.size(), robot_index + 3000); ++i) {
-      const std::optional<cv::Point2d> pixel = projectToPixel(camera, toBase(pose, points_[i]));
+      const cv::Point3d seen = projectToPixel(camera, toBase(pose, points_[i]));
+      const std::optional<cv::Point2d> pixel =  // none behind the camera
+          seen.z > 1e-6 ? std::optional(cv::Point2d(seen.x, seen.y)) : std::nullopt;
       if (pixel && previous && (previous->y - row) * (pixel->y - row) <= 0.0 &&
           previous->y != pixel->y) {
         const double t = (row - previous->y) / (pixel->y - previous->y);

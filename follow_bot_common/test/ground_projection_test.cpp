@@ -10,37 +10,12 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "follow_bot_common/testing/harness_camera.h"
+
 namespace follow_bot {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-double degrees(double deg) { return deg * kPi / 180.0; }
-
-CameraGeometry harnessCamera() {
-  CameraGeometry camera;
-  camera.fx = camera.fy = 554.256;
-  camera.cx = 320.0;
-  camera.cy = 240.0;
-  camera.height_m = 0.3;
-  camera.pitch_rad = degrees(20.0);
-  camera.x_offset_m = 0.0;
-  return camera;
-}
-
-// An independent forward model, written from the conventions in the header: the optical axes
-// expressed in base_link, then the pinhole. Returns (u, v, depth along the optical axis).
-cv::Point3d project(const CameraGeometry& camera, const cv::Point2d& ground) {
-  const double p = camera.pitch_rad;
-  const cv::Vec3d z_axis(std::cos(p), 0.0, -std::sin(p));
-  const cv::Vec3d x_axis(0.0, -1.0, 0.0);
-  const cv::Vec3d y_axis = z_axis.cross(x_axis);
-  const cv::Vec3d from_camera(ground.x - camera.x_offset_m, ground.y, -camera.height_m);
-  const double depth = from_camera.dot(z_axis);
-  return cv::Point3d(camera.cx + camera.fx * from_camera.dot(x_axis) / depth,
-                     camera.cy + camera.fy * from_camera.dot(y_axis) / depth, depth);
-}
 
 TEST(GroundProjection, CentrePixelLandsOnTheOpticalAxis) {
   for (double pitch_deg : {5.0, 20.0, 45.0, 80.0}) {
@@ -132,7 +107,7 @@ TEST(GroundProjection, RoundTripsWithAnIndependentProjection) {
           EXPECT_LE(v, camera.cy - camera.fy * std::tan(camera.pitch_rad) + 1e-9);
           continue;
         }
-        const cv::Point3d pixel = project(camera, *ground);
+        const cv::Point3d pixel = projectToPixel(camera, *ground);
         EXPECT_GT(pixel.z, 0.0);
         EXPECT_NEAR(pixel.x, u, 1e-6) << pitch_deg << " " << u << " " << v;
         EXPECT_NEAR(pixel.y, v, 1e-6) << pitch_deg << " " << u << " " << v;

@@ -173,7 +173,8 @@ ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeome
   return config;
 }
 
-PanoramaSettings panoramaSettings(const PanoramaConfig& cfg) {
+PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg,
+                                       const image_converter::MatchingConfig& matching) {
   requireLinked(cfg.step_angle_deg <= cfg.total_angle_deg,
                 "~step_angle_deg must be at most ~total_angle_deg", cfg.step_angle_deg,
                 cfg.total_angle_deg);
@@ -182,7 +183,7 @@ PanoramaSettings panoramaSettings(const PanoramaConfig& cfg) {
   requireLinked(cfg.yaw_tolerance_deg < cfg.step_angle_deg / 2.0,
                 "~yaw_tolerance_deg must be below ~step_angle_deg / 2", cfg.yaw_tolerance_deg,
                 cfg.step_angle_deg);
-  PanoramaSettings settings;
+  PanoramaSessionConfig settings;
   PanoramaCaptureConfig& capture = settings.capture;
   capture.total_angle = cfg.total_angle_deg * M_PI / 180.0;
   capture.step_angle = cfg.step_angle_deg * M_PI / 180.0;
@@ -194,14 +195,14 @@ PanoramaSettings panoramaSettings(const PanoramaConfig& cfg) {
   capture.return_to_start = cfg.return_to_start;
 
   settings.match.detector = parseChoice(
-      "detector", cfg.detector,
+      "detector", matching.detector,
       [](const std::string& name) {
         image_converter::Detector detector;
         return image_converter::parseDetector(name, detector) ? std::optional(detector)
                                                               : std::nullopt;
       },
       "orb or sift");
-  settings.match.min_inliers = cfg.min_inliers;
+  settings.match.min_inliers = matching.min_inliers;
   settings.method = parseChoice("stitch_method", cfg.stitch_method, parseStitchMethod,
                                 "auto, features or rotation");
   settings.frame_timeout = cfg.frame_timeout;

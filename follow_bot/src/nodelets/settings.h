@@ -16,10 +16,10 @@
 #include "follow_bot/colour_blobs.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot/marker_target.h"
-#include "follow_bot/panorama_capture.h"
-#include "follow_bot/panorama_stitch.h"
+#include "follow_bot/panorama_session.h"
 #include "follow_bot/parking_servo.h"
 #include "follow_bot/steering_law.h"
+#include "image_converter/MatchingConfig.h"
 
 namespace follow_bot {
 
@@ -43,13 +43,8 @@ BeaconControllerConfig beaconStartupConfig(const ros::NodeHandle& pnh);
 std::unique_ptr<MarkerDetector> makeMarkerDetector(const ParkerConfig& cfg);
 ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeometry& camera);
 
-struct PanoramaSettings {
-  PanoramaCaptureConfig capture;
-  image_converter::MatchOptions match;
-  StitchMethod method = StitchMethod::kAuto;
-  double frame_timeout = 0.0;    // s, wall time
-  double capture_timeout = 0.0;  // s, ROS time
-};
-PanoramaSettings panoramaSettings(const PanoramaConfig& cfg);
+// With the feature matching's ~params (image_converter's cfg/Matching.cfg).
+PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg,
+                                       const image_converter::MatchingConfig& matching);
 
 }  // namespace follow_bot

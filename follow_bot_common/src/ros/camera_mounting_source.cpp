@@ -1,16 +1,49 @@
 #include "follow_bot_common/ros/camera_mounting_source.h"
 
+#include <map>
+#include <mutex>
 #include <stdexcept>
+#include <utility>
 
 #include <ros/console.h>
 #include <tf2/LinearMath/Matrix3x3.h>
 #include <tf2/LinearMath/Quaternion.h>
 #include <tf2/exceptions.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
 
 #include "follow_bot_common/camera_mounting.h"
 #include "follow_bot_common/ros/params.h"
 
 namespace follow_bot {
+
+struct SharedTfListener {
+  explicit SharedTfListener(const ros::NodeHandle& nh) : listener(buffer, nh) {}
+  tf2_ros::Buffer buffer;
+  tf2_ros::TransformListener listener;
+};
+
+namespace {
+
+// One tf2 buffer and listener per process for each pair of tf topics as `nh` resolves them: the
+// behaviours in one nodelet manager share one /tf subscription and cache, and a robot whose /tf
+// is remapped to its own (tests/test_two_robots.py) keeps its own. Made on first use, gone with
+// its last user.
+std::shared_ptr<SharedTfListener> sharedTfListener(const ros::NodeHandle& nh) {
+  static std::mutex mutex;
+  static std::map<std::pair<std::string, std::string>, std::weak_ptr<SharedTfListener>> listeners;
+  const std::pair<std::string, std::string> topics(nh.resolveName("/tf"),
+                                                   nh.resolveName("/tf_static"));
+  std::lock_guard<std::mutex> lock(mutex);
+  std::shared_ptr<SharedTfListener> listener = listeners[topics].lock();
+  if (!listener) {
+    listener = std::make_shared<SharedTfListener>(nh);
+    listeners[topics] = listener;
+  }
+  return listener;
+}
+
+}  // namespace
 
 CameraMountingSource::CameraMountingSource(ros::NodeHandle& nh, const ros::NodeHandle& pnh,
                                            const CameraGeometry& fallback, std::string name)
@@ -23,10 +56,7 @@ CameraMountingSource::CameraMountingSource(ros::NodeHandle& nh, const ros::NodeH
   base_frame_ = param<std::string>(pnh, "base_frame", "base_link");
   if (base_frame_.empty()) throw std::invalid_argument("~base_frame must not be empty");
   timeout_s_ = positiveParam(pnh, "mounting_timeout", kDefaultTimeoutS);
-  if (use_tf_) {
-    buffer_ = std::make_unique<tf2_ros::Buffer>();
-    listener_ = std::make_unique<tf2_ros::TransformListener>(*buffer_, nh);
-  }
+  if (use_tf_) tf_ = sharedTfListener(nh);
 }
 
 bool CameraMountingSource::update(const std::string& frame_id, CameraGeometry& camera,
@@ -77,15 +107,15 @@ std::optional<CameraGeometry> CameraMountingSource::fromTf(const std::string& fr
   }
   geometry_msgs::TransformStamped camera_in_base, base_on_floor;
   try {
-    camera_in_base = buffer_->lookupTransform(base_frame_, frame_id, ros::Time(0));
+    camera_in_base = tf_->buffer.lookupTransform(base_frame_, frame_id, ros::Time(0));
   } catch (const tf2::TransformException& error) {
     why = error.what();
     return std::nullopt;
   }
   double base_height = 0.0;
-  if (base_frame_ != kFootprintFrame && buffer_->_frameExists(kFootprintFrame)) {
+  if (base_frame_ != kFootprintFrame && tf_->buffer._frameExists(kFootprintFrame)) {
     try {
-      base_height = buffer_->lookupTransform(kFootprintFrame, base_frame_, ros::Time(0))
+      base_height = tf_->buffer.lookupTransform(kFootprintFrame, base_frame_, ros::Time(0))
                         .transform.translation.z;
     } catch (const tf2::TransformException& error) {
       why = error.what();

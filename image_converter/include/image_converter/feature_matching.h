@@ -3,10 +3,13 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
+
+#include "image_converter/MatchingDefaults.h"
 
 namespace image_converter {
 
@@ -15,14 +18,20 @@ enum class Detector { kOrb, kSift };
 // "orb" or "sift" (lower case); false for anything else.
 bool parseDetector(const std::string& name, Detector& detector);
 std::string detectorName(Detector detector);
+// At compile time, of the names cfg/Matching.cfg allows: sift or else orb.
+constexpr Detector detectorNamed(std::string_view name) {
+  return name == "sift" ? Detector::kSift : Detector::kOrb;
+}
 
+// Defaults of detector and min_inliers: cfg/Matching.cfg's (MatchingDefaults, generated).
 struct MatchOptions {
-  Detector detector = Detector::kOrb;
+  Detector detector = detectorNamed(MatchingDefaults::detector);
   int max_features = 4000;           // keypoints kept per image
   double ratio = 0.75;               // Lowe's ratio test: best / second-best distance below this
   double ransac_threshold_px = 3.0;  // inlier tolerance of the RANSAC homography
-  int min_inliers = 25;              // fewer inliers: the views are taken not to overlap
-  double min_contrast = 2.0;         // grey-level standard deviation below this: a blank image
+  // Fewer inliers: the views are taken not to overlap.
+  int min_inliers = MatchingDefaults::min_inliers;
+  double min_contrast = 2.0;  // grey-level standard deviation below this: a blank image
   // Refine the RANSAC homography by dense ECC alignment of the overlap (cv::findTransformECC):
   // keypoints sit on a coarse pyramid grid (ORB), the aligned pixels do not. The refinement is
   // kept only when it lowers the error on inlier matches held out of the fit (see matchPair).

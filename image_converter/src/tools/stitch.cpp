@@ -39,7 +39,7 @@ namespace po = boost::program_options;
 // for --help). `usage` gets the usage text with every option.
 std::string parse(int argc, char** argv, Arguments& arguments, std::string& usage) {
   po::options_description options(kUsage);
-  std::string detector = "orb";
+  std::string detector = image_converter::detectorName(arguments.options.detector);
   options.add_options()("help,h", po::bool_switch(&arguments.help), "print this help and exit")(
       "output,o", po::value(&arguments.output)->value_name("FILE"), "panorama to write")(
       "detector", po::value(&detector)->value_name("orb|sift")->default_value(detector),

@@ -2,11 +2,13 @@
 // ~params and cmd_vel, so that a behaviour supplies only its cores and one step per frame.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
 
 #include <cv_bridge/cv_bridge.h>
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
@@ -22,6 +24,7 @@
 #include "follow_bot_common/ros/command_output.h"
 #include "follow_bot_common/ros/params.h"
 #include "follow_bot_common/ros/topics.h"
+#include "follow_bot_common/status_report.h"
 
 namespace follow_bot {
 
@@ -70,6 +73,7 @@ struct BehaviourOptions {
 //    mounting", no step()), then per accepted frame step(), the one
 //    CommandOutput::send (cmd_vel, ~status, watchdog, ~enable, final stop), report() and a lazy
 //    ~debug_image.
+//  * a behaviour's own diagnostics (addDiagnostics), updated before each frame's step().
 //  * every callback runs guarded (an exception drops the message, never the node) and under
 //    mutex(), the one the dynamic_reconfigure server shares.
 template <typename ConfigT>
@@ -110,6 +114,31 @@ class BehaviourNodelet : public CheckedNodelet {
   const std::string& imageTopic() const { return image_topic_; }
   CommandOutput& output() { return *output_; }
   boost::recursive_mutex& mutex() { return mutex_; }
+
+  // Adds the status "<node>: <name>" to /diagnostics (next to CommandOutput's "<node>:
+  // behaviour"): what `report()` says, asked under mutex() at most every ~diagnostic_period,
+  // before each accepted frame's step() and on updateDiagnostics().
+  void addDiagnostics(const std::string& name, std::function<StatusReport()> report) {
+    if (!diagnostics_) {
+      diagnostics_ = std::make_unique<diagnostic_updater::Updater>(
+          getNodeHandle(), getPrivateNodeHandle(), getPrivateNodeHandle().getNamespace());
+      diagnostics_->setHardwareID("none");
+    }
+    diagnostics_->add(name, [report](diagnostic_updater::DiagnosticStatusWrapper& status) {
+      const StatusReport health = report();
+      status.summary(static_cast<unsigned char>(health.level), health.message);
+      for (const auto& [key, value] : health.values) status.add(key, value);
+    });
+  }
+  // Under mutex(): publishes the diagnostics when ~diagnostic_period has passed, or now (`force`).
+  void updateDiagnostics(bool force = false) {
+    if (!diagnostics_) return;
+    if (force) {
+      diagnostics_->force_update();
+    } else {
+      diagnostics_->update();
+    }
+  }
 
   // Subscribes `handle(const M&)` to `topic` (queue 1), guarded and under mutex() like the
   // camera callbacks.
@@ -193,6 +222,7 @@ class BehaviourNodelet : public CheckedNodelet {
     // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
     output_->frameArrived();
     const Frame frame{msg->header, image->image, CommandOutput::frameTime(msg->header).toSec()};
+    updateDiagnostics();
     const Decision decision = updateMounting(msg->header.frame_id)
                                   ? step(frame)
                                   : Decision{{}, false, CameraMountingSource::kWaitingState};
@@ -235,6 +265,7 @@ class BehaviourNodelet : public CheckedNodelet {
   // Declared first among the ROS handles: destroyed last, it sends the final stop.
   std::unique_ptr<CommandOutput> output_;
   std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;  // the behaviour's own, if any
   image_transport::Publisher debug_pub_;
   ros::Subscriber camera_info_sub_;
   image_transport::Subscriber image_sub_;

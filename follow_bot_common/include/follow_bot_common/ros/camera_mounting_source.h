@@ -12,6 +12,8 @@
 //  * ~mounting_timeout (s, > 0, default 5): with tf, how long the first frames wait for the
 //    transform before the mounting ~params are used instead (logged loudly, once). A transform
 //    that appears later still replaces them.
+// With tf, the behaviours of one process (nodelets in one manager) share one tf2 buffer and
+// listener per pair of tf topics their node handles resolve (/tf, /tf_static, or remapped).
 #pragma once
 
 #include <chrono>
@@ -20,12 +22,12 @@
 #include <string>
 
 #include <ros/node_handle.h>
-#include <tf2_ros/buffer.h>
-#include <tf2_ros/transform_listener.h>
 
 #include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
+
+struct SharedTfListener;  // a tf2 buffer and its listener, shared within the process
 
 class CameraMountingSource {
  public:
@@ -58,8 +60,7 @@ class CameraMountingSource {
   std::string base_frame_;
   double timeout_s_ = kDefaultTimeoutS;
   CameraGeometry fallback_;
-  std::unique_ptr<tf2_ros::Buffer> buffer_;
-  std::unique_ptr<tf2_ros::TransformListener> listener_;
+  std::shared_ptr<SharedTfListener> tf_;  // the process's for this node's tf topics
   std::optional<std::chrono::steady_clock::time_point> waiting_since_;
   bool known_ = false;
   bool from_tf_ = false;
