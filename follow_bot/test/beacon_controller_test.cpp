@@ -614,28 +614,6 @@ TEST(Approach, SearchesDrivesSlowsAndArrives) {
   EXPECT_EQ(twist.linear, 0.0) << "too close: never reverses by default";
 }
 
-TEST(Approach, StaysArrivedThroughRangeJitterWithinTheReleaseBounds) {
-  const ColourBlobDetector detector;
-  const BeaconControllerConfig config = approachConfig();
-  BeaconController controller(config);
-  controller.update(look(detector, config.camera, Pose(), dumpsterAt(1.0)), 0.0);
-  ASSERT_EQ(controller.state(), BeaconState::kArrived);
-  // A range 10 mm long (a row or two of jitter) is outside the arrival tolerance but inside the
-  // release bound: still arrived, no creep.
-  const double jittered = 1.0 + 0.5 * (config.distance_tolerance + config.distance_release);
-  Twist2D twist =
-      controller.update(look(detector, config.camera, Pose(), dumpsterAt(jittered)), 0.1);
-  EXPECT_EQ(controller.state(), BeaconState::kArrived);
-  EXPECT_EQ(twist.linear, 0.0);
-  // Moved away beyond the release bound: approach again.
-  twist = controller.update(look(detector, config.camera, Pose(), dumpsterAt(1.05)), 0.2);
-  EXPECT_EQ(controller.state(), BeaconState::kApproaching);
-  EXPECT_GT(twist.linear, 0.0);
-  // Back at the same jittered range, not arrived before: the arrival tolerance applies.
-  controller.update(look(detector, config.camera, Pose(), dumpsterAt(jittered)), 0.3);
-  EXPECT_EQ(controller.state(), BeaconState::kApproaching);
-}
-
 TEST(Approach, ReversesOnlyWhenAllowed) {
   const ColourBlobDetector detector;
   BeaconControllerConfig config = approachConfig();

@@ -166,13 +166,6 @@ struct BeaconControllerConfig {
   // the 1 cm goal leaves room for the range's pixel quantisation (6 mm per row at 1 m).
   double distance_tolerance = 0.005;                                // m
   double bearing_tolerance = 1.0 * 3.14159265358979323846 / 180.0;  // rad
-  // Once arrived, the robot stays arrived until the range error or the bearing exceeds these,
-  // wider than the tolerances above: at rest near the stop the measured range jitters by a
-  // pixel row (6 mm at 1 m) with exposure drift and sensor noise, and each excursion past
-  // distance_tolerance would restart the approach for a creep of a few mm/s. 15 mm is the
-  // dumpster family's bound on the final distance.
-  double distance_release = 0.015;                                // m
-  double bearing_release = 3.0 * 3.14159265358979323846 / 180.0;  // rad
   double lost_hold = 1.0;  // s to stand still after losing the target before searching
 };
 
@@ -204,8 +197,7 @@ class BeaconController {
   // estimateRange().best(). A sphere's column is its centroid; a box's is the middle of its
   // silhouette, because seen obliquely its nearer face outweighs the rest and pulls the
   // centroid off the box's centre (~3 deg at the stop point from 30 deg off its axis). Arrived
-  // (zero, kArrived) when both are within tolerance, and kept while both stay within the release
-  // bounds; otherwise kApproaching with the linear and
+  // (zero, kArrived) when both are within tolerance; otherwise kApproaching with the linear and
   // angular laws of the config. Without a range (too close to see its bottom edge, or partly out of
   // frame) it only turns. A box spilling over both sides of the frame has no observable centre, so
   // its bearing counts as zero. When the target vanishes after being seen the robot stands still

@@ -229,8 +229,6 @@ std::string validate(const BeaconControllerConfig& c) {
            requirePositive("max_angular", c.max_angular),
            requirePositive("distance_tolerance", c.distance_tolerance),
            requirePositive("bearing_tolerance", c.bearing_tolerance),
-           requireAtLeast("distance_release", c.distance_release, c.distance_tolerance),
-           requireAtLeast("bearing_release", c.bearing_release, c.bearing_tolerance),
            requireAtLeast("lost_hold", c.lost_hold, 0.0),
        }) {
     if (!error.empty()) return error;
@@ -329,11 +327,8 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
   last_range_ = range;
   last_bearing_ = bearing;
 
-  const bool arrived = state_ == BeaconState::kArrived;
-  const double distance_bound = arrived ? config_.distance_release : config_.distance_tolerance;
-  const double bearing_bound = arrived ? config_.bearing_release : config_.bearing_tolerance;
-  if (range && std::abs(*range - config_.stop_distance) < distance_bound &&
-      std::abs(bearing) < bearing_bound) {
+  if (range && std::abs(*range - config_.stop_distance) < config_.distance_tolerance &&
+      std::abs(bearing) < config_.bearing_tolerance) {
     state_ = BeaconState::kArrived;
     return Twist2D();
   }
