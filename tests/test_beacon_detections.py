@@ -4,10 +4,13 @@ A roscore of its own, the real node, and frames from harness.render.Renderer at 
 poses (with camera_info): every fully visible sphere is labelled with its colour and its
 centroid lies within 3 px of the silhouette centre the renderer reports; the dumpster's centroid
 within 3 px of its projected outline's; no colour is reported that is not in the frame. Also
-under lighting gain 0.5 and 1.5 and noise sigma 8.
+under lighting gain 0.5 and 1.5 and noise sigma 8. The dumpster's frames go to a second node
+configured as its scenario runs it (approach mode, a box target: no roundness or size gate).
+Both nodes are mounted as the worlds' camera (~params): the size gate needs it.
 """
 
 import dataclasses
+import math
 import os
 import subprocess
 import threading
@@ -139,8 +142,27 @@ def expectations(world, renderer: Renderer, pose):
     return expected
 
 
+def mounting(world_name: str) -> list[str]:
+    """~params that mount the node's camera as the world's (no tf here): the beacon gate takes
+    only balls that fit one of the beacons' size resting on the floor, seen from that camera."""
+    camera = load_world(WORLDS / f"{world_name}.yaml").camera
+    return [
+        "_camera_mounting:=params",
+        f"_camera_height:={camera.height_m}",
+        f"_camera_pitch_deg:={math.degrees(camera.pitch)}",
+        f"_camera_x_offset:={camera.x_offset_m}",
+    ]
+
+
+# The nodes under test: name -> its ~params. Lab 5's beacons are balls; the dumpster is a box.
+CHASERS = {
+    "beacon_chaser": mounting("rgb"),
+    "box_chaser": [*mounting("dumpster"), "_mode:=approach", "_target_shape:=box"],
+}
+
+
 class NodeUnderTest:
-    """beacon_chaser on a roscore of its own; frames in, the ~detections answering each out."""
+    """beacon_chasers on a roscore of their own; frames in, each one's ~detections out."""
 
     def __init__(self):
         self.port = free_port()
@@ -150,48 +172,64 @@ class NodeUnderTest:
             ["roscore", "-p", str(self.port)], stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
         )
         assert wait_for_port(self.port, 20.0)
-        self.node = subprocess.Popen(
-            ["rosrun", "follow_bot", "beacon_chaser", "_camera_mounting:=params"],  # no tf here
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.STDOUT,
-        )
+        self.nodes = [
+            subprocess.Popen(
+                [
+                    "rosrun",
+                    "follow_bot",
+                    "beacon_chaser",
+                    f"__name:={name}",
+                    "_camera_mounting:=params",
+                    *params,
+                ],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.STDOUT,
+            )
+            for name, params in CHASERS.items()
+        ]
         rospy.init_node("beacon_detection_test", anonymous=True, disable_signals=True)
         self.lock = threading.Condition()
-        self.received: dict[float, BeaconDetections] = {}
-        self.sub = rospy.Subscriber(
-            "/beacon_chaser/detections", BeaconDetections, self.on_detections, queue_size=10
-        )
+        self.received: dict[tuple[str, float], BeaconDetections] = {}
+        self.subs = [
+            rospy.Subscriber(
+                f"/{name}/detections", BeaconDetections, self.on_detections, name, queue_size=10
+            )
+            for name in CHASERS
+        ]
         self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1)
         self.info_pub = rospy.Publisher(
             "/camera/rgb/camera_info", CameraInfo, queue_size=1, latch=True
         )
         deadline = time.monotonic() + 30.0
-        while self.image_pub.get_num_connections() == 0 or self.sub.get_num_connections() == 0:
-            assert time.monotonic() < deadline, "beacon_chaser did not connect"
-            assert self.node.poll() is None, "beacon_chaser exited"
+        while self.image_pub.get_num_connections() < len(CHASERS) or not all(
+            sub.get_num_connections() for sub in self.subs
+        ):
+            assert time.monotonic() < deadline, "a beacon_chaser did not connect"
+            assert all(node.poll() is None for node in self.nodes), "a beacon_chaser exited"
             time.sleep(0.05)
         self.stamp = 1.0
 
-    def on_detections(self, msg: BeaconDetections) -> None:
+    def on_detections(self, msg: BeaconDetections, name: str) -> None:
         with self.lock:
-            self.received[msg.header.stamp.to_sec()] = msg
+            self.received[name, msg.header.stamp.to_sec()] = msg
             self.lock.notify_all()
 
-    def detect(self, image: np.ndarray, camera) -> BeaconDetections:
+    def detect(self, image: np.ndarray, camera, name: str) -> BeaconDetections:
         self.stamp += 1.0 / 30.0
         stamp = rospy.Time.from_sec(self.stamp)
         info = camera_info_msg(camera.camera_info_dict())
         info.header.stamp = stamp
         self.info_pub.publish(info)
         self.image_pub.publish(bgr_to_msg(image, stamp, camera.frame_id))
-        key = stamp.to_sec()
+        key = name, stamp.to_sec()
         with self.lock:
             assert self.lock.wait_for(lambda: key in self.received, timeout=10.0), "no detections"
             return self.received.pop(key)
 
     def close(self) -> None:
         rospy.signal_shutdown("test done")
-        stop(self.node)
+        for node in self.nodes:
+            stop(node)
         stop(self.roscore)
         if self.saved_master is None:
             os.environ.pop("ROS_MASTER_URI", None)
@@ -222,7 +260,8 @@ def test_detections_match_the_rendered_truth(node, world_name, pose, variant):
     world = load_world(WORLDS / f"{world_name}.yaml")
     renderer = Renderer(world, **VARIANTS[variant])
     expected = expectations(world, renderer, pose)
-    detections = node.detect(renderer.render(pose, frame=0), renderer.camera)
+    chaser = "box_chaser" if world_name == "dumpster" else "beacon_chaser"
+    detections = node.detect(renderer.render(pose, frame=0), renderer.camera, chaser)
     by_colour = {d.colour: d for d in detections.detections}
     assert set(by_colour) == set(HUE_CENTRES)
     for colour, want in expected.items():

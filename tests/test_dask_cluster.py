@@ -8,7 +8,6 @@ identical to the serial run's.
 
 import json
 import os
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -16,16 +15,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from harness.report import without_wall_clock
+from harness.run_scenario import free_port
+
 SCENARIOS = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 RUNS = ("constant_arc", "drive_parking")  # short lockstep runs with the scripted driver
 DASK_BIN = Path(sys.executable).parent  # the venv's `dask` command line
-WALL_CLOCK = ("wall_time", "loop_wall_time")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 @pytest.fixture
@@ -74,11 +69,9 @@ def play(out: Path, *options: str) -> dict:
     return json.loads((out / "summary.json").read_text())
 
 
-def without_wall_clock(summary: dict) -> dict:
-    runs = []
-    for run in summary["runs"]:
-        metrics = {k: v for k, v in run["metrics"].items() if k not in WALL_CLOCK}
-        runs.append({**run, "metrics": metrics})
+def replayable(summary: dict) -> dict:
+    """The summary's runs and overall figures, without the wall-clock metrics."""
+    runs = [{**run, "metrics": without_wall_clock(run["metrics"])} for run in summary["runs"]]
     return {"runs": runs, "overall": summary["overall"]}
 
 
@@ -87,7 +80,7 @@ def test_cluster_runs_equal_serial_runs(scheduler, tmp_path):
     cluster = play(tmp_path / "cluster", f"--scheduler={scheduler}")
     assert [run["name"] for run in cluster["runs"]] == list(RUNS)
     assert cluster["overall"]["passed"] == 2 and cluster["overall"]["success_rate"] == 1.0
-    assert without_wall_clock(cluster) == without_wall_clock(serial)
+    assert replayable(cluster) == replayable(serial)
     for name in RUNS:
         folder = tmp_path / "cluster" / name  # the worker's artefacts, gathered back
         assert json.loads((folder / "result.json").read_text())["passed"] is True

@@ -144,7 +144,9 @@ def test_colour_flags_raise_for_big_contours_only(tmp_path):
         assert 79 * 119 - 40 <= flags[name]["area"] <= 79 * 119
         assert flags[name]["centroid"] == pytest.approx([x, y], abs=0.01)
     assert flags["blue"]["area"] <= 9 * 9  # 10x10 px: below min_area (100 px^2)
-    blobs = core.ColourBlobDetector().detect(known_frame())
+    blobs = core.ColourBlobDetector(core.ColourBlobConfig(roundness_tolerance=0.0)).detect(
+        known_frame()
+    )
     assert {b.name: b.area for b in blobs.colours} == {n: f["area"] for n, f in flags.items()}
     # The flagged contours drawn in white, nothing else changed.
     changed = np.any(image != known_frame(), axis=2)

@@ -83,6 +83,7 @@ def master_env():
         ("follow_bot follower", "_mode:=fast", "~mode"),
         ("follow_bot follower", "_limit_linear:=0", "~limit_linear must be > 0"),
         ("follow_bot follower", "_watchdog_timeout:=-1", "~watchdog_timeout must be > 0"),
+        ("follow_bot parker", "_wall_watchdog_timeout:=0", "~wall_watchdog_timeout must be > 0"),
         ("follow_bot follower", "_band_distance:=20", "~band_distance"),
         ("follow_bot beacon_chaser", "_sensitivity:=95", "sensitivity must be in [0, 90]"),
         ("follow_bot beacon_chaser", "_mode:=dance", "~mode must be"),

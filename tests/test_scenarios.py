@@ -1,9 +1,10 @@
 """The behaviours in the closed loop, each judged by its scenario's own criteria.
 
-Every run of the scenario families in worlds/scenarios (one file each, a base and a matrix) is
-played by run_scenario: all the selected runs in one call with --jobs (each in its own ROS
-graph: its own roscore, the behaviour's launch file, the simulator in lockstep), then one test
-per run reads its result.json and fails with every unmet criterion listed.
+Every run of the scenario families in worlds/scenarios and, under the harness's `realistic`
+camera, in worlds/realistic (one file each, a base and a matrix) is played by run_scenario: all
+the selected runs in one call with --jobs (each in its own ROS graph: its own roscore, the
+behaviour's launch file, the simulator in lockstep), then one test per run reads its
+result.json and fails with every unmet criterion listed.
 """
 
 import json
@@ -16,18 +17,28 @@ import pytest
 from harness.camera import LENSES
 from harness.scenario import load_scenarios
 
-SCENARIO_DIR = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
+WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 # How many runs each family's matrix holds: a file that expands to fewer (a lost matrix entry, a
 # renamed file) fails test_every_family_has_its_runs instead of silently running less.
 FAMILY_SIZES = {
-    "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 6,
+    "follower": 15, "follower_mounting": 16, "dumpster": 10, "beacons_follow_green": 7,
     "beacons_red_stop": 5, "parker_tag": 19, "parker_sign": 15,
     # The Python lab nodes (follow_bot/scripts) on their C++ twins' criteria (extends).
     "lab_follow_green": 2, "lab_red_stop": 2, "lab_line_follower": 3,
+    # Issue 15: every behaviour's family under the `realistic` camera, the follower's lap also
+    # under each of its effects alone (worlds/realistic/README.md).
+    "follower_realistic": 19, "dumpster_realistic": 2, "beacons_follow_green_realistic": 1,
+    "beacons_red_stop_realistic": 1, "parker_tag_realistic": 3, "parker_sign_realistic": 3,
 }  # fmt: skip
+
+
+def family_file(family: str) -> Path:
+    folder = "realistic" if family.endswith("_realistic") else "scenarios"
+    return WORLDS / folder / f"{family}.yaml"
+
+
 FAMILIES = {
-    family: [s.name for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")]
-    for family in FAMILY_SIZES
+    family: [s.name for s in load_scenarios(family_file(family))] for family in FAMILY_SIZES
 }
 # `make test` plays these runs: every fault run (camera dropout, a hidden marker; each also ends
 # judged on its family's nominal criteria) and one run of each family without a fault run;
@@ -40,12 +51,16 @@ QUICK = {
     "parker_tag/dropout", "parker_tag/hidden",
     "parker_sign/d1.2_off-20_b45",
     "lab_follow_green/dropout", "lab_red_stop/plain", "lab_line_follower/lap_fast",
+    "follower_realistic/realistic_fast", "dumpster_realistic/2m_30deg_realistic",
+    "beacons_follow_green_realistic/realistic", "beacons_red_stop_realistic/realistic",
+    "parker_tag_realistic/d1_off10_b0_realistic", "parker_sign_realistic/d1.5_off0_b18_realistic",
 }  # fmt: skip
 # Issue 14: every behaviour's runs through the turtlebot3 barrel lens, each with the start and
 # the bounds of its pinhole twin.
 LENS_TWINS = {
     "follower/lap_lens": "follower/lap_default",
     "dumpster/4m_30deg_lens": "dumpster/4m_30deg",
+    "beacons_follow_green/lens": "beacons_follow_green/plain",
     "beacons_follow_green/lens_rectify": "beacons_follow_green/plain",  # image_proc rectifies
     "beacons_red_stop/lens": "beacons_red_stop/plain",
     "parker_tag/lens_rectify": "parker_tag/d0.8_off15_b10",  # image_proc rectifies
@@ -77,8 +92,8 @@ def test_lens_runs_keep_their_pinhole_twins_start_and_bounds():
     runs = {
         s.name: s
         for family in FAMILY_SIZES
-        for s in load_scenarios(SCENARIO_DIR / f"{family}.yaml")
-        if not family.startswith("lab_")
+        for s in load_scenarios(family_file(family))
+        if not family.startswith("lab_") and not family.endswith("_realistic")
     }
     assert {name for name, s in runs.items() if s.perturbations.lens} == set(LENS_TWINS)
     for name, twin_name in LENS_TWINS.items():
@@ -98,7 +113,7 @@ def results(request, tmp_path_factory) -> Path:
             if getattr(item, "originalname", "") == "test_behaviour_scenario"
         }
     )
-    families = sorted({str(SCENARIO_DIR / f"{name.split('/')[0]}.yaml") for name in selected})
+    families = sorted({str(family_file(name.split("/")[0])) for name in selected})
     out = tmp_path_factory.mktemp("scenarios")
     subprocess.run(
         [

@@ -148,6 +148,9 @@ def test_sign_pose_on_harness_frames(frames, request, tmp_path):
         assert r["seen"]["found"], view
         assert r["position_error"] < 0.01, (view, r["position_error"])
         assert r["angle_error"] < r["bound"], (view, r["angle_error"])
+    # Mean position error, measured 0.7 mm on pinhole frames and 1.0 mm through the lens (3.9 mm
+    # while the sign was aligned on the raw frame, up to 6.5 mm at 0.9-2 m).
+    assert np.mean([r["position_error"] for r in rows]) < 0.002
 
 
 def test_no_flips_over_a_fronto_parallel_sweep(scene, tmp_path):

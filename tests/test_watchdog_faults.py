@@ -25,7 +25,16 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.fuzz import NODES, bgr_msg, camera_info_msg, image_msg, odom_msg, probe_frame
+from harness.fuzz import (
+    FX,
+    NODES,
+    WIDTH,
+    bgr_msg,
+    camera_info_msg,
+    image_msg,
+    odom_msg,
+    probe_frame,
+)
 from harness.node_under_test import run_with_client
 
 RATE_HZ = 30.0
@@ -97,7 +106,9 @@ def client(key: str) -> None:
         clock.clock = rospy.Time.from_sec(sim_time[0])
         clock_pub.publish(clock)
         published[0] = sim_time[0]
-        info_pub.publish(camera_info_msg())
+        # A camera that changes resolution publishes the intrinsics of the new size.
+        (width, height), fx = size[0], FX * size[0][0] / WIDTH
+        info_pub.publish(camera_info_msg(fx, fx, width / 2, height / 2, width, height))
         if frame:
             # Lockstep, as the simulator: the next tick waits for this frame's answer, and for
             # its Twist when the answer says one went out.

@@ -138,6 +138,10 @@ void bindLineDetector(py::module_& m) {
       .def_readwrite("error_px", &BandMeasurement::error_px)
       .def_readwrite("error_normalised", &BandMeasurement::error_normalised)
       .def_readwrite("confidence", &BandMeasurement::confidence)
+      .def_readwrite("centre_pixel_count", &BandMeasurement::centre_pixel_count)
+      .def_readwrite("centre_found", &BandMeasurement::centre_found)
+      .def_readwrite("centre_x", &BandMeasurement::centre_x)
+      .def_readwrite("centre_y", &BandMeasurement::centre_y)
       .def_readwrite("row_begin", &BandMeasurement::row_begin)
       .def_readwrite("row_end", &BandMeasurement::row_end)
       .def_readwrite("distance_m", &BandMeasurement::distance_m)
@@ -205,8 +209,17 @@ void bindColourBlobs(py::module_& m) {
                      "A list (assign a new one to change it).")
       .def_readwrite("open_kernel", &ColourBlobConfig::open_kernel)
       .def_readwrite("close_kernel", &ColourBlobConfig::close_kernel)
-      .def_readwrite("min_area", &ColourBlobConfig::min_area);
+      .def_readwrite("min_area", &ColourBlobConfig::min_area)
+      .def_readwrite("roundness_tolerance", &ColourBlobConfig::roundness_tolerance)
+      .def_readwrite("floor_ball", &ColourBlobConfig::floor_ball, "A FloorBall or None.");
   defKeywordInit(config, static_cast<Validator<ColourBlobConfig>>(&validate));
+  py::class_<ColourBlobConfig::FloorBall> floor_ball(config, "FloorBall");
+  floor_ball.def_readwrite("radius_m", &ColourBlobConfig::FloorBall::radius_m)
+      .def_readwrite("tolerance", &ColourBlobConfig::FloorBall::tolerance)
+      .def_readwrite("camera", &ColourBlobConfig::FloorBall::camera);
+  defKeywordInit(floor_ball);
+  m.def("floor_ball_radius", &floorBallRadius, "camera"_a, "centre"_a, "radius_px"_a,
+        "The radius of the ball on the floor whose silhouette is this circle; None if none fits.");
 
   py::class_<ColourBlob> blob(m, "ColourBlob",
                               "The largest blob of one colour; pixel centres at integers.");
@@ -359,6 +372,8 @@ void bindBeaconController(py::module_& m) {
       .def_readwrite("max_angular", &Config::max_angular)
       .def_readwrite("distance_tolerance", &Config::distance_tolerance)
       .def_readwrite("bearing_tolerance", &Config::bearing_tolerance)
+      .def_readwrite("distance_release", &Config::distance_release)
+      .def_readwrite("bearing_release", &Config::bearing_release)
       .def_readwrite("lost_hold", &Config::lost_hold);
   defKeywordInit(config, static_cast<Validator<Config>>(&validate));
   m.def("check_colours_detected", &checkColoursDetected, "controller"_a, "detector"_a,

@@ -24,10 +24,11 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: core_reference (--line | --blobs) FRAME...\n"
+    "usage: core_reference (--line | --blobs | --blobs-any-shape) FRAME...\n"
     "       core_reference --steer (lecture | pd | path) FRAME...\n"
     "       core_reference --park TAG_SIZE TAG_ID TAG_FAMILY FRAME...\n\n"
-    "Runs the default LineDetector (--line), ColourBlobDetector (--blobs), the steering law of\n"
+    "Runs the default LineDetector (--line), ColourBlobDetector (--blobs; --blobs-any-shape:\n"
+    "without the roundness gate, as for a box target), the steering law of\n"
     "that mode on the LineDetector's measurements (--steer; frames 1/30 s apart, each applying\n"
     "the previous command) or the ParkingServo on a TagDetector's poses (--park; default camera,\n"
     "frames 1/30 s apart) on each image file in order and prints one JSON line per frame with\n"
@@ -41,9 +42,11 @@ void printBand(const char* name, const follow_bot::BandMeasurement& band) {
       ", \"%s\": {\"found\": %s, \"pixel_count\": %d, \"centroid_x\": %.17g, \"centroid_y\": "
       "%.17g, "
       "\"error_px\": %.17g, \"error_normalised\": %.17g, \"confidence\": %.17g, \"row_begin\": %d, "
-      "\"row_end\": %d}",
+      "\"row_end\": %d, \"centre_pixel_count\": %d, \"centre_found\": %s, \"centre_x\": %.17g, "
+      "\"centre_y\": %.17g}",
       name, band.found ? "true" : "false", band.pixel_count, band.centroid_x, band.centroid_y,
-      band.error_px, band.error_normalised, band.confidence, band.row_begin, band.row_end);
+      band.error_px, band.error_normalised, band.confidence, band.row_begin, band.row_end,
+      band.centre_pixel_count, band.centre_found ? "true" : "false", band.centre_x, band.centre_y);
 }
 
 void printLine(const follow_bot::LineMeasurement& m) {
@@ -144,7 +147,8 @@ int main(int argc, char** argv) {
   if (argc >= 4 && !std::strcmp(argv[1], "--steer")) return steer(argc, argv);
   if (argc >= 6 && !std::strcmp(argv[1], "--park")) return park(argc, argv);
   const bool line = argc >= 2 && !std::strcmp(argv[1], "--line");
-  const bool blobs = argc >= 2 && !std::strcmp(argv[1], "--blobs");
+  const bool any_shape = argc >= 2 && !std::strcmp(argv[1], "--blobs-any-shape");
+  const bool blobs = any_shape || (argc >= 2 && !std::strcmp(argv[1], "--blobs"));
   if (argc < 3 || (!line && !blobs)) {
     std::cerr << "core_reference: give --line, --blobs, --steer MODE or --park SIZE ID FAMILY, "
                  "then at least one frame\n"
@@ -152,7 +156,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   const follow_bot::LineDetector line_detector;
-  const follow_bot::ColourBlobDetector blob_detector;
+  follow_bot::ColourBlobConfig blob_config;
+  if (any_shape) blob_config.roundness_tolerance = 0.0;
+  const follow_bot::ColourBlobDetector blob_detector(blob_config);
   for (int i = 2; i < argc; ++i) {
     const cv::Mat frame = cv::imread(argv[i], cv::IMREAD_COLOR);
     if (frame.empty()) {

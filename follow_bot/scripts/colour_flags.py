@@ -19,8 +19,10 @@ lab.start("colour_flags", __doc__, {
     "min_area": "px^2 a colour's largest contour needs for its flag",
     "show": "also show the picture in a window (false)",
 })  # fmt: skip
+# The worksheet's flag is colour and area only: any shape.
+params = {"min_area": core.ColourBlobConfig().min_area}
 detector = core.ColourBlobDetector(
-    lab.configured(core.ColourBlobConfig, {"min_area": core.ColourBlobConfig().min_area})
+    lab.configured(core.ColourBlobConfig, params, roundness_tolerance=0.0)
 )
 flags = rospy.Publisher("~flags", String, queue_size=1)
 display = lab.Display("colour flags")

@@ -22,7 +22,8 @@ lab.start("follow_green_stop_red", __doc__, {
 defaults = core.BeaconControllerConfig()
 params = {"mode": "follow_green_stop_red", "close_area": defaults.close_area}
 controller = core.BeaconController(lab.configured(core.BeaconControllerConfig, params))
-detector = core.ColourBlobDetector()
+# Lab 5's detector is colour and area only (beacon_chaser adds the shape and size gates).
+detector = core.ColourBlobDetector(core.ColourBlobConfig(roundness_tolerance=0.0))
 output = lab.CommandOutput()
 
 

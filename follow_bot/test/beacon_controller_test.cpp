@@ -146,14 +146,22 @@ double bearingToCentreDeg(const Pose& robot, double x, double y) {
   return std::abs(std::remainder(bearing, 2.0 * kPi)) * 180.0 / kPi;
 }
 
-// A sphere's exact silhouette, pixel centres inside the cone of rays that meet it.
+// A sphere's exact silhouette, pixel centres inside the cone of rays that meet it. Through the
+// camera's lens, if it has one: each raw pixel centre's ray is that of its rectified pixel.
 void drawSphere(cv::Mat& frame, const CameraGeometry& camera, const Pose& robot,
                 const Sphere& sphere, const cv::Scalar& colour) {
   const cv::Point3d c = baseToOptical(camera, worldToBase(robot, sphere.centre));
   const double k = c.dot(c) - sphere.radius * sphere.radius;
+  std::vector<cv::Point2d> pixels;
+  for (int v = 0; v < frame.rows; ++v) {
+    for (int u = 0; u < frame.cols; ++u) pixels.emplace_back(u, v);
+  }
+  pixels = rectifyPixels(camera, pixels);
   for (int v = 0; v < frame.rows; ++v) {
     for (int u = 0; u < frame.cols; ++u) {
-      const cv::Point3d ray((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+      const cv::Point2d& pixel = pixels[v * frame.cols + u];
+      const cv::Point3d ray((pixel.x - camera.cx) / camera.fx, (pixel.y - camera.cy) / camera.fy,
+                            1.0);
       const double along = ray.dot(c);
       if (along > 0.0 && along * along > ray.dot(ray) * k) {
         frame.at<cv::Vec3b>(v, u) = cv::Vec3b(colour[0], colour[1], colour[2]);
@@ -167,6 +175,14 @@ ColourBlob blobOf(const BlobResult& result, const std::string& name) {
   const ColourBlob* blob = result.find(name);
   if (blob == nullptr) throw std::runtime_error("no colour " + name);
   return *blob;
+}
+
+// The detector as an approach node configures it for a box target (settings.cpp): a box is not
+// round, so no roundness gate.
+ColourBlobConfig boxTargetDetector() {
+  ColourBlobConfig config;
+  config.roundness_tolerance = 0.0;
+  return config;
 }
 
 // The ground-contact range reads whole rows, so allow 0.6 of a row's worth near `range`: the
@@ -198,7 +214,7 @@ TEST(RangeFromWidth, IsFocalTimesWidthOverPixels) {
 }
 
 TEST(RangeEstimate, BoxRangesFromWidthAndGroundContactMatchTheFootprint) {
-  const ColourBlobDetector detector;
+  const ColourBlobDetector detector(boxTargetDetector());
   BeaconObject object;  // a box with a 1.8 m face
   for (double gap : {1.7, 2.0, 3.0, 4.0, 6.0}) {
     const Box box{gap + 0.5, 0.0, kPi / 2.0, 1.8, 1.0, 1.2};  // the dumpster, face-on
@@ -225,7 +241,7 @@ TEST(RangeEstimate, BoxRangesFromWidthAndGroundContactMatchTheFootprint) {
 }
 
 TEST(RangeEstimate, BoxGroundRangeWorksWithPitchAndOffsetAndObliqueViews) {
-  const ColourBlobDetector detector;
+  const ColourBlobDetector detector(boxTargetDetector());
   BeaconObject object;
   object.size_m = 1.0;
   CameraGeometry camera;  // pitched 20 deg down
@@ -245,7 +261,7 @@ TEST(RangeEstimate, BoxGroundRangeWorksWithPitchAndOffsetAndObliqueViews) {
 }
 
 TEST(RangeEstimate, BoxCutByTheFrameHasNoSizeRangeAndBottomCutHasNoGroundRange) {
-  const ColourBlobDetector detector;
+  const ColourBlobDetector detector(boxTargetDetector());
   const CameraGeometry camera = levelCamera();
   const Box box{1.0 + 0.5, 0.0, kPi / 2.0, 1.8, 1.0, 1.2};  // 1 m away: wider than the frame
   cv::Mat frame = emptyScene(camera);
@@ -338,6 +354,69 @@ TEST(RangeEstimate, SphereCutByTheFrameOrNotFoundHasNoRange) {
   EXPECT_EQ(green.bounding_box.x, 0);
   EXPECT_FALSE(estimateRange(green, kWidth, kHeight, camera, ball).best());
   EXPECT_FALSE(estimateRange(ColourBlob(), kWidth, kHeight, camera, ball).best());
+}
+
+// The level camera through the harness's turtlebot3 lens (harness/src/harness/camera.py):
+// visible barrel distortion, P = K.
+CameraGeometry barrelCamera() {
+  CameraGeometry camera = levelCamera();
+  const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  camera.lens = CameraLens{k, {-0.28, 0.07, 0.0, 0.0, 0.0}, cv::Matx33d::eye()};
+  return camera;
+}
+
+// The green ball of the follow-green scenario seen by `camera` from the origin (raw frames when
+// the camera has a lens).
+BlobResult lookAtBall(const CameraGeometry& camera, const cv::Point3d& centre) {
+  cv::Mat frame = emptyScene(camera);
+  drawSphere(frame, camera, Pose(), {centre, 0.2}, cv::Scalar(0, 200, 0));
+  return ColourBlobDetector().detect(frame);
+}
+
+TEST(RectifyBlob, WithoutALensIsTheBlobsOwn) {
+  const ColourBlob green = blobOf(lookAtBall(levelCamera(), {1.0, 0.3, 0.2}), "green");
+  ASSERT_TRUE(green.found);
+  const RectifiedBlob rectified = rectifyBlob(green, levelCamera(), {kWidth, kHeight});
+  EXPECT_EQ(rectified.area, green.area);
+  EXPECT_EQ(rectified.area_in_frame, green.area);
+  EXPECT_EQ(rectified.centroid, green.centroid);
+  EXPECT_EQ(rectified.circle_centre, cv::Point2d(green.circle_centre));
+  EXPECT_EQ(rectified.circle_radius, green.circle_radius);
+  EXPECT_EQ(rectified.width, green.bounding_box.width);
+  EXPECT_EQ(rectified.contour.size(), green.contour.size());
+}
+
+TEST(RectifyBlob, ARawFrameThroughTheLensMeasuresAsTheRectifiedFrame) {
+  // The ball near where follow-green holds (0.47 m from its surface, cut by the frame's bottom
+  // edge), off the axis and farther: the rectified contour of the raw blob has the pinhole
+  // blob's area inside the frame, and where the pinhole frame does not cut the ball its area,
+  // centroid and size, while the raw blob is 5-16 % smaller. The lens sees wider: where the
+  // pinhole frame cuts the ball, the rectified contour encloses more.
+  struct Case {
+    cv::Point3d centre;
+    double raw_shrink_min;  // 1 - raw area / pinhole area, at least
+    bool cut;               // by the pinhole frame
+  };
+  const Case cases[] = {{{0.67, 0.0, 0.2}, 0.05, true},
+                        {{0.72, 0.2, 0.2}, 0.13, true},
+                        {{1.5, -0.55, 0.2}, 0.15, false}};
+  for (const Case& c : cases) {
+    const ColourBlob pinhole = blobOf(lookAtBall(levelCamera(), c.centre), "green");
+    const ColourBlob raw = blobOf(lookAtBall(barrelCamera(), c.centre), "green");
+    ASSERT_TRUE(pinhole.found && raw.found) << c.centre;
+    EXPECT_GT(1.0 - raw.area / pinhole.area, c.raw_shrink_min) << c.centre;
+    const RectifiedBlob rectified = rectifyBlob(raw, barrelCamera(), {kWidth, kHeight});
+    EXPECT_NEAR(rectified.area_in_frame, pinhole.area, 0.005 * pinhole.area) << c.centre;
+    if (c.cut) {
+      EXPECT_GT(rectified.area, 1.01 * pinhole.area) << c.centre;
+      continue;
+    }
+    EXPECT_NEAR(rectified.area, pinhole.area, 0.005 * pinhole.area) << c.centre;
+    EXPECT_NEAR(rectified.centroid.x, pinhole.centroid.x, 0.3) << c.centre;
+    EXPECT_NEAR(rectified.centroid.y, pinhole.centroid.y, 0.3) << c.centre;
+    EXPECT_NEAR(rectified.circle_radius, pinhole.circle_radius, 1.0) << c.centre;
+    EXPECT_NEAR(rectified.width, pinhole.bounding_box.width, 1.0) << c.centre;
+  }
 }
 
 // ---- Controller: configuration -------------------------------------------------------------
@@ -567,6 +646,42 @@ BeaconControllerConfig approachConfig() {
   return config;
 }
 
+TEST(FollowGreenStopRed, HoldsAndSteersOnRawFramesThroughTheLensAsOnRectifiedOnes) {
+  BeaconControllerConfig config;
+  config.camera = barrelCamera();
+  BeaconController through_lens(config);
+  config.camera.lens.reset();
+  BeaconController pinhole(config);
+  // Off the axis and beyond the hold point: the same turn as on the pinhole frame, where the
+  // raw centroid turns less.
+  const cv::Point3d far(1.2, -0.3, 0.2);
+  const Twist2D expected = pinhole.update(lookAtBall(levelCamera(), far), 0.0);
+  ASSERT_EQ(pinhole.state(), BeaconState::kApproaching);
+  const BlobResult raw_far = lookAtBall(barrelCamera(), far);
+  const Twist2D twist = through_lens.update(raw_far, 0.0);
+  EXPECT_EQ(through_lens.state(), BeaconState::kApproaching);
+  EXPECT_EQ(twist.linear, expected.linear);
+  EXPECT_NEAR(twist.angular, expected.angular, 0.001 * std::abs(expected.angular));
+  pinhole.reset();
+  EXPECT_GT(std::abs(pinhole.update(raw_far, 0.0).angular - expected.angular),
+            0.005 * std::abs(expected.angular))
+      << "the lens must matter for this test to mean anything";
+  // 0.485 m from the ball's surface (beyond where the pinhole first holds): holding on both
+  // frames; the raw blob's own area (2 % short of close_area) would have driven on.
+  const cv::Point3d near(0.685, 0.0, 0.2);
+  pinhole.reset();
+  pinhole.update(lookAtBall(levelCamera(), near), 1.0);
+  EXPECT_EQ(pinhole.state(), BeaconState::kHolding);
+  const BlobResult raw_near = lookAtBall(barrelCamera(), near);
+  const Twist2D hold = through_lens.update(raw_near, 1.0);
+  EXPECT_EQ(hold.linear, 0.0);
+  EXPECT_EQ(hold.angular, 0.0);
+  EXPECT_EQ(through_lens.state(), BeaconState::kHolding);
+  pinhole.reset();
+  pinhole.update(raw_near, 1.0);
+  EXPECT_EQ(pinhole.state(), BeaconState::kApproaching);
+}
+
 // The dumpster world's box with its near face `gap` metres ahead of the origin, face-on.
 Box dumpsterAt(double gap, double lateral = 0.0) {
   return Box{gap + 0.5, lateral, kPi / 2.0, 1.8, 1.0, 1.2};
@@ -580,7 +695,7 @@ BlobResult look(const ColourBlobDetector& detector, const CameraGeometry& camera
 }
 
 TEST(Approach, SearchesDrivesSlowsAndArrives) {
-  const ColourBlobDetector detector;
+  const ColourBlobDetector detector(boxTargetDetector());
   const BeaconControllerConfig config = approachConfig();
   BeaconController controller(config);
   Twist2D twist = controller.update(detector.detect(emptyScene(config.camera)), 0.0);
@@ -614,8 +729,30 @@ TEST(Approach, SearchesDrivesSlowsAndArrives) {
   EXPECT_EQ(twist.linear, 0.0) << "too close: never reverses by default";
 }
 
+TEST(Approach, StaysArrivedThroughRangeJitterWithinTheReleaseBounds) {
+  const ColourBlobDetector detector(boxTargetDetector());
+  const BeaconControllerConfig config = approachConfig();
+  BeaconController controller(config);
+  controller.update(look(detector, config.camera, Pose(), dumpsterAt(1.0)), 0.0);
+  ASSERT_EQ(controller.state(), BeaconState::kArrived);
+  // A range 10 mm long (a row or two of jitter) is outside the arrival tolerance but inside the
+  // release bound: still arrived, no creep.
+  const double jittered = 1.0 + 0.5 * (config.distance_tolerance + config.distance_release);
+  Twist2D twist =
+      controller.update(look(detector, config.camera, Pose(), dumpsterAt(jittered)), 0.1);
+  EXPECT_EQ(controller.state(), BeaconState::kArrived);
+  EXPECT_EQ(twist.linear, 0.0);
+  // Moved away beyond the release bound: approach again.
+  twist = controller.update(look(detector, config.camera, Pose(), dumpsterAt(1.05)), 0.2);
+  EXPECT_EQ(controller.state(), BeaconState::kApproaching);
+  EXPECT_GT(twist.linear, 0.0);
+  // Back at the same jittered range, not arrived before: the arrival tolerance applies.
+  controller.update(look(detector, config.camera, Pose(), dumpsterAt(jittered)), 0.3);
+  EXPECT_EQ(controller.state(), BeaconState::kApproaching);
+}
+
 TEST(Approach, ReversesOnlyWhenAllowed) {
-  const ColourBlobDetector detector;
+  const ColourBlobDetector detector(boxTargetDetector());
   BeaconControllerConfig config = approachConfig();
   config.allow_reverse = true;
   BeaconController controller(config);
@@ -625,7 +762,7 @@ TEST(Approach, ReversesOnlyWhenAllowed) {
 }
 
 TEST(Approach, HoldsStillWhenTheTargetIsLostThenSearches) {
-  const ColourBlobDetector detector;
+  const ColourBlobDetector detector(boxTargetDetector());
   const BeaconControllerConfig config = approachConfig();
   BeaconController controller(config);
   // Seen on the right, then gone.
@@ -682,7 +819,7 @@ struct Outcome {
 // The closed loop of Exercise 10 at the harness camera's 30 Hz: render, detect, control,
 // limit, move. Ends a second after the controller first reports kArrived.
 Outcome approachInClosedLoop(const Pose& start, const Box& box) {
-  ColourBlobConfig green_only;  // as an approach node would configure it
+  ColourBlobConfig green_only = boxTargetDetector();  // as an approach node configures it
   green_only.colours = {*parseColourName("green")};
   const ColourBlobDetector detector(green_only);
   const BeaconControllerConfig config = approachConfig();

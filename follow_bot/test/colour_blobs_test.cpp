@@ -54,6 +54,13 @@ ColourBlob blobOf(const BlobResult& result, const std::string& name) {
   return *blob;
 }
 
+// Any shape: as the lab worksheet's colour steps take it.
+ColourBlobConfig anyShape() {
+  ColourBlobConfig config;
+  config.roundness_tolerance = 0.0;
+  return config;
+}
+
 TEST(ColourNames, ParseGivesTheIssueDefaults) {
   const std::optional<ColourSpec> red = parseColourName("red");
   const std::optional<ColourSpec> green = parseColourName("green");
@@ -125,6 +132,8 @@ TEST(ColourBlobConfig, ValidateNamesTheBadField) {
   EXPECT_EQ(validate(config), "close_kernel must be 0 (off) or an odd size, got -3");
   config.close_kernel = 1;
   EXPECT_EQ(validate(config), "");
+  config.roundness_tolerance = -0.1;
+  EXPECT_EQ(validate(config), "roundness_tolerance must be in [0, 1], got -0.1");
 }
 
 TEST(ColourBlobDetector, ConstructorRejectsBadConfig) {
@@ -349,13 +358,121 @@ TEST(ColourBlobDetector, RejectsEmptyAndWrongTypeFramesWithoutThrowing) {
 TEST(ColourBlobDetector, RectangleBoundingBoxIsExact) {
   cv::Mat frame = greyFrame();
   cv::rectangle(frame, cv::Rect(100, 150, 201, 121), kPureGreen, cv::FILLED);
-  const ColourBlob green = blobOf(ColourBlobDetector().detect(frame), "green");
+  const ColourBlob green = blobOf(ColourBlobDetector(anyShape()).detect(frame), "green");
   ASSERT_TRUE(green.found);
   EXPECT_EQ(green.bounding_box, cv::Rect(100, 150, 201, 121));
   // The 3x3 elliptical (cross) opening trims each corner pixel: half a px^2 of contour area.
   EXPECT_DOUBLE_EQ(green.area, 200.0 * 120.0 - 4 * 0.5);
   EXPECT_NEAR(green.centroid.x, 200.0, 1e-9);
   EXPECT_NEAR(green.centroid.y, 210.0, 1e-9);
+}
+
+TEST(CircleFit, RecoversADiskAndMeasuresHowFarAPolygonStrays) {
+  cv::Mat mask(kHeight, kWidth, CV_8UC1, cv::Scalar(0));
+  cv::circle(mask, {300, 200}, 40, 255, cv::FILLED);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  const std::optional<CircleFit> disk = fitCircle(contours[0], mask.size());
+  ASSERT_TRUE(disk);
+  EXPECT_NEAR(disk->centre.x, 300.0, 0.05);
+  EXPECT_NEAR(disk->centre.y, 200.0, 0.05);
+  EXPECT_NEAR(disk->radius, 39.5, 0.1);  // boundary pixel centres lie half a pixel inside
+  EXPECT_LT(disk->rms_error, 0.35);
+
+  mask.setTo(0);
+  cv::rectangle(mask, cv::Rect(100, 100, 61, 61), 255, cv::FILLED);
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  const std::optional<CircleFit> square = fitCircle(contours[0], mask.size());
+  ASSERT_TRUE(square);
+  EXPECT_NEAR(square->centre.x, 130.0, 0.05);
+  EXPECT_GT(square->rms_error, 3.5);  // about 0.11 of its 34.6 px radius
+
+  // Only border pixels, or a straight run: nothing to judge.
+  mask.setTo(255);
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  EXPECT_FALSE(fitCircle(contours[0], mask.size()));
+  EXPECT_FALSE(
+      fitCircle({{10, 10}, {11, 10}, {12, 10}, {13, 10}, {14, 10}, {15, 10}}, mask.size()));
+}
+
+TEST(ColourBlobDetector, OnlyRoundBlobsAreBeaconsAndTheFramesEdgeDoesNotCount) {
+  cv::Mat frame = greyFrame();
+  drawDisk(frame, {200.0, 240.0}, 30.0, kPureGreen, true);  // a ball, smaller than the poster
+  cv::rectangle(frame, cv::Rect(350, 100, 160, 90), kPureGreen, cv::FILLED);  // a poster
+  drawDisk(frame, {-20.0, 100.0}, 40.0, kPureRed);  // a ball half out of view, on the left
+  cv::rectangle(frame, cv::Rect(600, 300, 40, 60), kPureBlue, cv::FILLED);  // a box, cut off
+  const BlobResult result = ColourBlobDetector().detect(frame);  // the beacon chaser's gate
+  const ColourBlob green = blobOf(result, "green");
+  ASSERT_TRUE(green.found);
+  EXPECT_EQ(green.blob_count, 1);
+  EXPECT_NEAR(green.centroid.x, 200.0, 0.5);
+  EXPECT_TRUE(blobOf(result, "red").found);
+  EXPECT_FALSE(blobOf(result, "blue").found);
+
+  const BlobResult all = ColourBlobDetector(anyShape()).detect(frame);
+  EXPECT_EQ(blobOf(all, "green").blob_count, 2);
+  EXPECT_NEAR(blobOf(all, "green").centroid.x, 430.0, 0.5);  // the poster is the larger
+  EXPECT_TRUE(blobOf(all, "blue").found);
+}
+
+// The image circle of a ball of `radius` m resting on the floor `distance` m ahead of a level
+// camera (the default one, pitch 0) on its optical axis: its silhouette's ends on the image's
+// middle column are the rays tangent to the ball, theta -+ alpha below the horizontal.
+std::pair<cv::Point2d, double> floorBallCircle(const CameraGeometry& camera, double distance,
+                                               double radius) {
+  const double drop = camera.height_m - radius;
+  const double theta = std::atan2(drop, distance);
+  const double alpha = std::asin(radius / std::hypot(drop, distance));
+  const double top = camera.cy + camera.fy * std::tan(theta - alpha);
+  const double bottom = camera.cy + camera.fy * std::tan(theta + alpha);
+  return {{camera.cx, 0.5 * (top + bottom)}, 0.5 * (bottom - top)};
+}
+
+CameraGeometry levelCamera() {
+  CameraGeometry camera;
+  camera.pitch_rad = 0.0;
+  return camera;
+}
+
+TEST(FloorBallRadius, RecoversTheRadiusOfABallOnTheFloorAndNoneAboveTheHorizon) {
+  const CameraGeometry camera = levelCamera();
+  for (const double radius : {0.1, 0.2, 0.25}) {
+    for (const double distance : {0.8, 2.0, 4.0}) {
+      const auto [centre, radius_px] = floorBallCircle(camera, distance, radius);
+      const std::optional<double> implied = floorBallRadius(camera, centre, radius_px);
+      ASSERT_TRUE(implied) << radius << " m at " << distance << " m";
+      EXPECT_NEAR(*implied, radius, 1e-9) << radius << " m at " << distance << " m";
+    }
+  }
+  // A 20 px disk centred 40 px above the horizon (a wall picture): no ball on the floor.
+  EXPECT_FALSE(floorBallRadius(camera, {320.0, camera.cy - 40.0}, 20.0));
+  EXPECT_FALSE(floorBallRadius(camera, {320.0, 300.0}, 0.0));
+}
+
+TEST(ColourBlobDetector, FloorBallGateKeepsOnlyBallsOfTheBeaconsSize) {
+  const CameraGeometry camera = levelCamera();
+  cv::Mat frame = greyFrame();
+  const auto [beacon, beacon_px] = floorBallCircle(camera, 2.0, 0.2);
+  drawDisk(frame, beacon, beacon_px, kPureGreen, true);
+  const auto [small, small_px] = floorBallCircle(camera, 1.0, 0.12);  // larger in the view
+  drawDisk(frame, small + cv::Point2d(-200.0, 0.0), small_px, kPureGreen, true);
+  drawDisk(frame, {500.0, 150.0}, 30.0, kPureRed);  // a round picture on a wall
+  ColourBlobConfig balls;
+  balls.floor_ball = ColourBlobConfig::FloorBall{0.2, 0.3, camera};
+  const BlobResult result = ColourBlobDetector(balls).detect(frame);
+  const ColourBlob green = blobOf(result, "green");
+  ASSERT_TRUE(green.found);
+  EXPECT_EQ(green.blob_count, 1);
+  EXPECT_NEAR(green.centroid.x, beacon.x, 0.5);
+  EXPECT_FALSE(blobOf(result, "red").found);
+
+  const BlobResult all = ColourBlobDetector().detect(frame);  // any size
+  EXPECT_EQ(blobOf(all, "green").blob_count, 2);
+  EXPECT_NEAR(blobOf(all, "green").centroid.x, small.x - 200.0, 0.5);  // the larger
+  EXPECT_TRUE(blobOf(all, "red").found);
+
+  balls.floor_ball->radius_m = -0.2;
+  EXPECT_EQ(validate(balls), "floor_ball.radius_m must be > 0, got -0.2");
 }
 
 TEST(ColourBlobDetector, MaskOfUnknownColourIsEmpty) {

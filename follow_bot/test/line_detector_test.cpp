@@ -294,6 +294,101 @@ TEST(LineDetector, FindsAnAntiAliasedLineWithinHalfAPixel) {
   }
 }
 
+// Where a curve enters or leaves the view the image's side edge cuts the line's patch: the
+// band's centroid (the lecture's) lies off the line, its centre (whole runs only) on it.
+TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
+  const LineDetector detector;
+  cv::Mat left = greyFrame();
+  paintStripe(left, 0, 10, 360, 370);   // cut by the left edge
+  paintStripe(left, 20, 10, 370, 380);  // whole
+  const BandMeasurement entering = detector.detect(left).band;
+  EXPECT_EQ(entering.pixel_count, 200);
+  EXPECT_DOUBLE_EQ(entering.centroid_x, 14.5);
+  EXPECT_DOUBLE_EQ(entering.centroid_y, 369.5);
+  EXPECT_EQ(entering.centre_pixel_count, 100);
+  EXPECT_TRUE(entering.centre_found);
+  EXPECT_DOUBLE_EQ(entering.centre_x, 24.5);
+  EXPECT_DOUBLE_EQ(entering.centre_y, 374.5);
+
+  cv::Mat right = greyFrame();
+  paintStripe(right, 630, 10, 360, 365);  // cut by the right edge
+  paintStripe(right, 600, 10, 365, 380);
+  const BandMeasurement leaving = detector.detect(right).band;
+  EXPECT_EQ(leaving.pixel_count, 200);
+  EXPECT_EQ(leaving.centre_pixel_count, 150);
+  EXPECT_DOUBLE_EQ(leaving.centre_x, 604.5);
+  EXPECT_DOUBLE_EQ(leaving.centre_y, 372.0);
+
+  // In one row a cut patch and a whole run: only the patch is left out.
+  cv::Mat both = greyFrame();
+  paintStripe(both, 0, 5, 360, 380);
+  paintStripe(both, 300, 11, 360, 380);
+  paintStripe(both, 620, 20, 360, 380);
+  const BandMeasurement beside = detector.detect(both).band;
+  EXPECT_EQ(beside.pixel_count, 36 * 20);
+  EXPECT_DOUBLE_EQ(beside.centroid_x, (2.0 * 5 + 305.0 * 11 + 629.5 * 20) / 36);
+  EXPECT_EQ(beside.centre_pixel_count, 11 * 20);
+  EXPECT_DOUBLE_EQ(beside.centre_x, 305.0);
+  EXPECT_DOUBLE_EQ(beside.centre_y, 369.5);
+
+  // A row entirely of line colour is cut at both edges.
+  cv::Mat full_row = greyFrame();
+  paintStripe(full_row, 0, 640, 360, 361);
+  paintStripe(full_row, 300, 11, 361, 380);
+  const BandMeasurement across = detector.detect(full_row).band;
+  EXPECT_EQ(across.centre_pixel_count, 11 * 19);
+  EXPECT_DOUBLE_EQ(across.centre_x, 305.0);
+  EXPECT_DOUBLE_EQ(across.centre_y, 370.0);
+}
+
+TEST(LineDetector, ALineCutInEveryRowIsFoundButHasNoCentre) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 0, 20, 0, 480);
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_TRUE(band.found);
+  EXPECT_DOUBLE_EQ(band.centroid_x, 9.5);
+  EXPECT_EQ(band.centre_pixel_count, 0);
+  EXPECT_FALSE(band.centre_found);
+
+  // Whole runs below min_pixels (30): a centre, not found.
+  paintStripe(frame, 300, 10, 360, 362);
+  const BandMeasurement few = LineDetector().detect(frame).band;
+  EXPECT_EQ(few.centre_pixel_count, 20);
+  EXPECT_FALSE(few.centre_found);
+  EXPECT_DOUBLE_EQ(few.centre_x, 304.5);
+  EXPECT_DOUBLE_EQ(few.centre_y, 360.5);
+}
+
+// A 9 px anti-aliased line at 45 deg leaving through the left edge: x = 374 - y.
+TEST(LineDetector, TheCentreOfAnObliqueLineCutByTheEdgeLiesOnIt) {
+  cv::Mat frame = greyFrame();
+  cv::line(frame, cv::Point(374 - 300, 300), cv::Point(374 - 420, 420), kYellow, 9, cv::LINE_AA);
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  ASSERT_TRUE(band.centre_found);
+  EXPECT_NEAR(band.centre_x, 374.0 - band.centre_y, 0.5);
+  EXPECT_GT(band.centroid_x - (374.0 - band.centroid_y), 1.4);  // the cut rows pull it right
+}
+
+TEST(LineDetector, TheNearestBlobsCentreLeavesOutItsCutRuns) {
+  const LineDetector detector;
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 300, 11, 0, 480);
+  paintStripe(frame, 600, 40, 365, 480);  // tape cut by the right edge, band rows 365..379
+  cv::Mat line_only = greyFrame();
+  paintStripe(line_only, 300, 11, 0, 480);
+  const BandMeasurement on_line = detector.detect(frame, detector.detect(line_only)).band;
+  EXPECT_EQ(on_line.pixel_count, 11 * 20);
+  EXPECT_EQ(on_line.centre_pixel_count, 11 * 20);
+  EXPECT_DOUBLE_EQ(on_line.centre_x, 305.0);
+  // Kept for the hint, the tape is cut in every row: found, no centre.
+  cv::Mat tape_side = greyFrame();
+  paintStripe(tape_side, 610, 11, 0, 480);
+  const BandMeasurement on_tape = detector.detect(frame, detector.detect(tape_side)).band;
+  EXPECT_EQ(on_tape.pixel_count, 40 * 15);
+  EXPECT_EQ(on_tape.centre_pixel_count, 0);
+  EXPECT_FALSE(on_tape.centre_found);
+}
+
 TEST(LineDetector, IgnoresLineColourOutsideTheBand) {
   cv::Mat frame = greyFrame();
   paintStripe(frame, 0, 640, 0, 360);    // everything above the band, up to row 359

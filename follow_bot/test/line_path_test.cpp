@@ -151,6 +151,10 @@ BandMeasurement bandAt(std::optional<double> column, double row) {
   measured.pixel_count = 500;
   measured.centroid_x = *column;
   measured.centroid_y = row;
+  measured.centre_pixel_count = 500;  // the whole line
+  measured.centre_found = true;
+  measured.centre_x = *column;
+  measured.centre_y = row;
   measured.error_px = *column - kWidth / 2.0;
   measured.error_normalised = std::clamp(measured.error_px / (kWidth / 2.0), -1.0, 1.0);
   measured.confidence = 1.0;
@@ -504,6 +508,29 @@ TEST(PathLaw, IgnoresUnconfidentAndRejectedFrames) {
   EXPECT_NE(follower.state(), LineState::kFollowing);
 }
 
+TEST(PathLaw, RemembersTheLineCentreNotTheCentroid) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
+  LineMeasurement m = bandMeasurement(400.0);
+  m.band.centroid_x = 380.0;  // pulled by a patch the image edge cuts
+  follower.step({m, 0.0, Twist2D()});
+  const std::optional<cv::Point2d> line = pixelToGround(harnessCamera(), 400.0, kBandRow);
+  ASSERT_TRUE(line);
+  ASSERT_EQ(follower.pathPoints().size(), 1u);
+  EXPECT_DOUBLE_EQ(follower.pathPoints()[0].x, line->x);
+  EXPECT_DOUBLE_EQ(follower.pathPoints()[0].y, line->y);
+}
+
+TEST(PathLaw, ALineCutByTheImageEdgeIsNotRememberedButStillShownToTheFallback) {
+  PathLaw follower(SteeringConfig(), harnessCamera());
+  LineMeasurement cut = bandMeasurement(10.0);  // the line at the left edge
+  cut.band.centre_pixel_count = 0;
+  cut.band.centre_found = false;
+  const Twist2D command = follower.step({cut, 0.0, Twist2D()});
+  EXPECT_EQ(follower.pathState().points, 0);
+  EXPECT_EQ(follower.state(), LineState::kFollowing) << "the pd fallback steers on the centroid";
+  EXPECT_GT(command.angular, 0.0) << "toward the line, on the left";
+}
+
 TEST(PathLaw, NeverReturnsNonFiniteUnderGarbage) {
   PathLaw follower(SteeringConfig(), harnessCamera());
   std::mt19937 random(3);
@@ -517,10 +544,13 @@ TEST(PathLaw, NeverReturnsNonFiniteUnderGarbage) {
   for (int frame = 0; frame < 5000; ++frame) {
     LineMeasurement m = bandMeasurement(pick(640.0 * unit(random)));
     m.band.centroid_y = pick(480.0 * unit(random));
+    m.band.centre_y = pick(480.0 * unit(random));
+    m.band.centre_found = unit(random) < 0.8;
     m.band.confidence = pick(unit(random));
     m.band.error_normalised = pick(m.band.error_normalised);
     m.look_ahead = m.band;
     m.look_ahead.centroid_y = pick(264.0);
+    m.look_ahead.centre_y = pick(264.0);
     m.look_ahead.found = unit(random) < 0.5;
     const double r = unit(random);
     stamp = r < 0.05 ? 0.0 : r < 0.1 ? pick(stamp) : stamp + (r < 0.15 ? 1e6 : kFrameDt);

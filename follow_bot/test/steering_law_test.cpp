@@ -42,6 +42,10 @@ BandMeasurement scriptedBand(double column, double row, int pixel_count = 400,
   band.found = pixel_count >= 30;
   band.centroid_x = column;
   band.centroid_y = row;
+  band.centre_pixel_count = pixel_count;  // the whole line: no run cut by the image edge
+  band.centre_found = band.found;
+  band.centre_x = column;
+  band.centre_y = row;
   band.error_px = column - 320.0;
   band.error_normalised = band.error_px / 320.0;
   band.confidence = confidence;

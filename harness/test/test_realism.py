@@ -218,7 +218,7 @@ def test_realistic_families_extend_the_clean_ones_with_their_bounds():
 
     folder = Path(__file__).resolve().parents[2] / "worlds" / "realistic"
     sizes = {
-        "follower_realistic": 15,
+        "follower_realistic": 19,
         "dumpster_realistic": 2,
         "beacons_follow_green_realistic": 1,
         "beacons_red_stop_realistic": 1,
@@ -236,3 +236,12 @@ def test_realistic_families_extend_the_clean_ones_with_their_bounds():
     assert lap.name == "follower_realistic/realistic"
     assert dict(lap.perturbations.realism) == PROFILES["realistic"]
     assert {c.metric: c.maximum for c in lap.criteria}["cross_track.rms"] == 0.001
+    laps = {run.name: run for run in load_scenarios(folder / "follower_realistic.yaml")}
+    for seed in (1, 2, 3):
+        other = laps[f"follower_realistic/realistic_seed{seed}"]
+        assert other.seed == seed
+        assert other.perturbations.realism == lap.perturbations.realism
+    fast = laps["follower_realistic/realistic_fast"]
+    assert fast.perturbations.realism == lap.perturbations.realism
+    assert fast.behaviour.args["max_linear"] == "0.7"
+    assert {c.metric: c.maximum for c in fast.criteria}["cross_track.max"] == 0.030

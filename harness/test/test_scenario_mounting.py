@@ -1,5 +1,6 @@
-"""run_scenario gives the world's camera mounting to the robot description only: the node under
-test finds its camera in tf, as on a robot, and is never told the mounting as ~params."""
+"""run_scenario's command lines for the node under test. It gives the world's camera mounting to
+the robot description only: the node finds its camera in tf, as on a robot, and is never told the
+mounting as ~params. In lockstep it tells the node the simulator's per-step wall tolerance."""
 
 from dataclasses import replace
 from pathlib import Path
@@ -30,3 +31,17 @@ def test_the_description_carries_the_runs_camera():
     )
     moved = replace(course, height_m=0.5, pitch=0.0)
     assert description_command(moved)[4:6] == ["camera_height:=0.5", "camera_pitch_deg:=0.0"]
+
+
+def test_lockstep_gives_the_c_plus_plus_behaviours_the_reply_timeout_as_wall_watchdog():
+    by_name = {s.name: s for path in SCENARIOS.glob("*.yaml") for s in load_scenarios(path)}
+    for name in ("follower/lap_default", "parker_tag/d2_off20_b60", "beacons_red_stop/plain"):
+        scenario = by_name[name]
+        assert scenario.lockstep and scenario.reply_timeout == 2.0, name
+        assert "wall_watchdog_timeout:=2.0" in behaviour_command(scenario), name
+        realtime = replace(scenario, lockstep=False)
+        assert not any("wall_watchdog" in a for a in behaviour_command(realtime)), name
+    # The Python lab nodes have no wall-clock watchdog, and their launch no such arg.
+    lab = by_name["lab_red_stop/plain"]
+    assert lab.behaviour.launch_file == "lab.launch"
+    assert not any("wall_watchdog" in a for a in behaviour_command(lab)), lab.name

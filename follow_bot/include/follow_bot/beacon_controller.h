@@ -10,6 +10,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -84,6 +85,26 @@ std::optional<double> rangeFromWidth(double focal_px, double width_m, double wid
 std::optional<cv::Point3d> sphereCentreFromCircle(const CameraGeometry& camera,
                                                   const cv::Point2d& circle_centre,
                                                   double circle_radius_px, double radius_m);
+
+// A blob of a frame of `frame_size` as the rectified camera (fx, fy, cx, cy) sees it. Raw frames
+// through a lens (camera.lens) shrink and bend a blob, the more the further it is off the axis,
+// so its contour points go through rectifyPixels and every measure is the rectified contour's;
+// without a lens, the blob's own measures.
+struct RectifiedBlob {
+  std::vector<cv::Point2d> contour;
+  double area = 0.0;     // px^2 enclosed (cv::contourArea)
+  cv::Point2d centroid;  // of that area (contour moments)
+  // The area of the part inside a rectified frame of the same size (the contour's points clamped
+  // to the outermost pixel centres), as a frame rectified by image_proc shows it: a barrel lens
+  // sees wider than its rectified frame, and close_area is an area on such a frame, where a near
+  // ball is cut by the bottom edge.
+  double area_in_frame = 0.0;
+  cv::Point2d circle_centre;   // minimum enclosing circle
+  double circle_radius = 0.0;  // px
+  double width = 0.0;          // px, inclusive as a bounding box's
+};
+RectifiedBlob rectifyBlob(const ColourBlob& blob, const CameraGeometry& camera,
+                          const cv::Size& frame_size);
 
 // Both range estimates for a found blob of `object` in a frame of the given size (an estimate
 // whose condition above fails is left empty; a blob that is not found gives neither).
@@ -166,6 +187,13 @@ struct BeaconControllerConfig {
   // the 1 cm goal leaves room for the range's pixel quantisation (6 mm per row at 1 m).
   double distance_tolerance = 0.005;                                // m
   double bearing_tolerance = 1.0 * 3.14159265358979323846 / 180.0;  // rad
+  // Once arrived, the robot stays arrived until the range error or the bearing exceeds these,
+  // wider than the tolerances above: at rest near the stop the measured range jitters by a
+  // pixel row (6 mm at 1 m) with exposure drift and sensor noise, and each excursion past
+  // distance_tolerance would restart the approach for a creep of a few mm/s. 15 mm is the
+  // dumpster family's bound on the final distance.
+  double distance_release = 0.015;                                // m
+  double bearing_release = 3.0 * 3.14159265358979323846 / 180.0;  // rad
   double lost_hold = 1.0;  // s to stand still after losing the target before searching
 };
 
@@ -191,13 +219,16 @@ class BeaconController {
   // Follow mode, in priority order: a stop-colour blob (found, area >= stop_min_area) in view
   // or seen within stop_release_delay -> zero, kStoppedByRed; no follow-colour blob ->
   // kSearching; area >= close_area -> zero, kHolding; otherwise kApproaching: approach_speed
-  // and angular = -turn_gain * e.
+  // and angular = -turn_gain * e. Areas and the centroid are the rectified blob's
+  // (rectifyBlob with config.camera; close_area against its area_in_frame), so raw frames
+  // through a lens hold and steer as rectified ones.
   //
   // Approach mode: with the target in view, bearing from its column and range from
   // estimateRange().best(). A sphere's column is its centroid; a box's is the middle of its
   // silhouette, because seen obliquely its nearer face outweighs the rest and pulls the
   // centroid off the box's centre (~3 deg at the stop point from 30 deg off its axis). Arrived
-  // (zero, kArrived) when both are within tolerance; otherwise kApproaching with the linear and
+  // (zero, kArrived) when both are within tolerance, and kept while both stay within the release
+  // bounds; otherwise kApproaching with the linear and
   // angular laws of the config. Without a range (too close to see its bottom edge, or partly out of
   // frame) it only turns. A box spilling over both sides of the frame has no observable centre, so
   // its bearing counts as zero. When the target vanishes after being seen the robot stands still

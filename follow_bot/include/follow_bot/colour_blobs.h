@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/BeaconChaserDefaults.h"
+#include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
 
@@ -44,11 +45,50 @@ struct ColourBlobConfig {
   int close_kernel = 5;
   // A colour is found when its largest external contour encloses at least this many px^2.
   double min_area = BeaconChaserDefaults::min_area;
+  // For balls: a contour counts only when its boundary's RMS distance to the circle that best
+  // fits it is at most 1 px (pixel quantisation) plus this fraction of that circle's radius.
+  // Boundary pixels on the image border are left out, so a ball cut by the frame's edge is
+  // judged by its arc; posters, boxes and crescents are not round. 0: any shape, as the lab
+  // worksheet's colour steps and an approached box take it.
+  double roundness_tolerance = BeaconChaserDefaults::roundness_tolerance;
+  // For balls of a known size resting on the floor: a contour counts only when the ball its
+  // circle implies (floorBallRadius) has this radius within `tolerance` (a fraction of it).
+  // A wall picture lies above the horizon, a smaller or larger ball has another radius. Empty:
+  // any size, as the lab worksheet's colour steps take it; the beacon chaser sets its
+  // ~ball_radius and ~ball_size_tolerance.
+  struct FloorBall {
+    double radius_m = 0.0;
+    double tolerance = 0.0;
+    CameraGeometry camera;
+  };
+  std::optional<FloorBall> floor_ball;
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field,
 // e.g. "colours[1] (green): sensitivity must be in [0, 90], got 95".
 std::string validate(const ColourBlobConfig& config);
+
+// How far `contour` strays from the circle that best fits it (least squares, Kasa): the RMS of
+// its boundary pixels' distances to that circle, and the circle's radius, in px. Pixels on the
+// border of an `image`-sized frame are left out. Nullopt when fewer than 5 pixels remain or
+// they fit no circle (a straight run): the shape cannot be judged.
+struct CircleFit {
+  cv::Point2d centre;
+  double radius = 0.0;
+  double rms_error = 0.0;
+};
+std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Size image);
+
+// The radius of the ball resting on the floor whose silhouette has the circle (`centre`,
+// `radius_px`, raw image pixels) in `camera`'s view: the circle's ends on the line through the
+// principal point are the rays tangent to the ball (see sphereCentreFromCircle), so their
+// bisector points at its centre, at angle theta below the horizontal, and half the angle
+// between them is its angular radius alpha; a ball of radius r touching the floor has its
+// centre r below the camera's height h, hence r = h / (1 + sin(theta) / sin(alpha)). Nullopt
+// when no ball on the floor fits (the circle is too high in the view: a wall picture) or the
+// input is unusable.
+std::optional<double> floorBallRadius(const CameraGeometry& camera, const cv::Point2d& centre,
+                                      double radius_px);
 
 // The largest blob of one colour. All geometry is in full-image pixel coordinates with pixel
 // centres at integer positions (as cv::moments); every field but `name` is zero/empty unless
@@ -56,7 +96,7 @@ std::string validate(const ColourBlobConfig& config);
 struct ColourBlob {
   std::string name;
   bool found = false;
-  int blob_count = 0;         // external contours of this colour with area >= min_area
+  int blob_count = 0;         // contours of this colour with area >= min_area that pass the gates
   double area = 0.0;          // px^2 enclosed by the largest contour (cv::contourArea)
   cv::Point2d centroid;       // of the area enclosed by the contour (contour moments)
   cv::Point2f circle_centre;  // minimum enclosing circle of the contour
@@ -98,6 +138,9 @@ class ColourBlobDetector {
 
  private:
   void cleanedMask(const cv::Mat& hsv, const ColourSpec& spec, cv::Mat& mask) const;
+  // The roundness and floor-ball gates (ColourBlobConfig::roundness_tolerance, floor_ball);
+  // true when both are off or the shape cannot be judged.
+  bool beaconShaped(const std::vector<cv::Point>& contour, cv::Size image) const;
 
   ColourBlobConfig config_;
   cv::Mat open_kernel_;   // empty when opening is off

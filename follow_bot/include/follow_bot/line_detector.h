@@ -164,6 +164,16 @@ struct BandMeasurement {
   // falls linearly to 0 at the full width. A thin line through the band scores 1; a frame
   // entirely of line colour is found but scores 0; a line ending inside the band scores low.
   double confidence = 0.0;
+  // The line's centre: the centroid of the line pixels in whole runs only. A row's run of line
+  // pixels that reaches the image's left or right edge is cut there, so its middle is not the
+  // line's: where a curve enters or leaves the view the centroid lies up to half a line width
+  // off the line (on the floor), while a whole run's middle is on it (a row sees the floor at
+  // one depth, so along a row the image is an affine map of the floor). Ground positions
+  // (PathLaw) use this; the centroid above stays the lecture's.
+  int centre_pixel_count = 0;  // line pixels in runs that reach neither side edge
+  bool centre_found = false;   // centre_pixel_count >= min_pixels
+  double centre_x = 0.0;       // full-image pixel coordinates, valid when centre_pixel_count > 0
+  double centre_y = 0.0;
   int row_begin = 0;  // rows actually scanned: [row_begin, row_end)
   int row_end = 0;
   double distance_m = 0.0;  // and the rest of the band's placeBand() result
@@ -213,16 +223,30 @@ class LineDetector {
   const CameraGeometry& camera() const { return camera_; }
 
  private:
-  // The moments of a band's line pixels, divided by 255, and the rows that hold any.
+  // One row's line pixels, fed in increasing column order, and the runs of them that reach the
+  // image's left or right edge. Branch-free, like the pixel test it follows.
+  struct RowSums {
+    int count = 0;
+    std::int64_t sum_x = 0;
+    int left_run = 0;   // line pixels fill columns [0, left_run)
+    int run_begin = 0;  // first column of the run holding the latest line pixel
+    int last = -2;      // the latest line pixel's column
+    void add(int x, bool is_line) {
+      count += is_line ? 1 : 0;
+      sum_x += is_line ? x : 0;
+      left_run += (is_line && x == left_run) ? 1 : 0;
+      run_begin = (is_line && x != last + 1) ? x : run_begin;
+      last = is_line ? x : last;
+    }
+  };
+
+  // The moments of a band's line pixels, divided by 255, and the rows that hold any; the same
+  // moments of the pixels in whole runs (BandMeasurement::centre_x).
   struct BandSums {
     std::int64_t count = 0, sum_x = 0, sum_y = 0;
     int occupied_rows = 0;
-    void addRow(int y, int row_count, std::int64_t row_sum_x) {
-      count += row_count;
-      sum_x += row_sum_x;
-      sum_y += static_cast<std::int64_t>(row_count) * y;
-      occupied_rows += row_count > 0 ? 1 : 0;
-    }
+    std::int64_t whole_count = 0, whole_sum_x = 0, whole_sum_y = 0;
+    void addRow(int y, const RowSums& row, int image_width);
   };
 
   BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band,

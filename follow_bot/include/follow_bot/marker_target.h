@@ -4,6 +4,7 @@
 
 #include <array>
 #include <optional>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -33,6 +34,29 @@ class MarkerDetector {
   virtual std::optional<MarkerObservation> detect(const cv::Mat& gray,
                                                   const CameraGeometry& camera) = 0;
 };
+
+// The rectified camera's images (fx, fy, cx, cy) of patches of a raw frame through camera.lens,
+// where straight edges are straight: what the marker detectors refine on. Building a patch's map
+// (cv::initUndistortRectifyMap) cost as much as the tag search on it, every frame, so the map of
+// a region around the frame is built once (again when the lens, the intrinsics or the frame size
+// change) and each patch inside it reads its part; a patch reaching beyond it gets its own map.
+class RectifiedPatches {
+ public:
+  // The patch of rectified pixels `patch` (which may reach beyond the frame), sampled from `raw`
+  // (bilinear, the raw frame's edge pixels repeated beyond it). Needs a lens.
+  cv::Mat patch(const cv::Mat& raw, const CameraGeometry& camera, const cv::Rect& patch);
+
+ private:
+  std::optional<CameraGeometry> camera_;  // whose map is kept (only intrinsics and lens count)
+  cv::Size frame_size_;
+  cv::Rect region_;  // rectified pixels the map covers
+  cv::Mat map_, map_fraction_;
+};
+
+// Where the raw frame shows rectified pixels (the inverse of rectifyPixels, as image_geometry's
+// unrectifyPoint): through K, D and R of camera.lens. Unchanged without a lens.
+std::vector<cv::Point2d> unrectifyPixels(const CameraGeometry& camera,
+                                         const std::vector<cv::Point2d>& rectified);
 
 // Draws `marker` on `bgr`: its outline, its axes projected with `camera`'s intrinsics (x red,
 // y green, z blue, each half the marker's width) and its id.

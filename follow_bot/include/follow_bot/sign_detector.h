@@ -84,7 +84,7 @@ class SignDetector : public MarkerDetector {
 
  private:
   struct Matches {
-    cv::Matx33d plane_to_image;       // RANSAC homography, sign plane (metres) to pixels
+    cv::Matx33d plane_to_image;       // RANSAC homography, sign plane (metres) to raw pixels
     std::vector<cv::Point3f> object;  // inliers on the sign plane
     std::vector<cv::Point2f> image;   // ... and in the image
   };
@@ -106,10 +106,12 @@ class SignDetector : public MarkerDetector {
                                             const Matches& matches, bool tracked);
   // The sign's corners TL, TR, BR, BL on its plane, metres.
   std::vector<cv::Point2d> outlinePlane() const;
-  // One render-and-align pass of at most `iterations` ECC steps on a sign-plane (metres) to image
-  // homography, in place; false (and the homography untouched) when ECC fails, correlates poorly
-  // or moves the corners too far.
-  bool refineHomography(const cv::Mat& gray, int iterations, cv::Matx33d& plane_to_image) const;
+  // One render-and-align pass of at most `iterations` ECC steps on a sign-plane (metres) to
+  // rectified-pixel homography, in place (through a lens, on the rectified patch of the raw
+  // frame); false (and the homography untouched) when ECC fails, correlates poorly or moves the
+  // corners too far.
+  bool refineHomography(const cv::Mat& gray, const CameraGeometry& camera, int iterations,
+                        cv::Matx33d& plane_to_image);
 
   SignDetectorConfig config_;
   double height_m_ = 0.0;
@@ -122,9 +124,10 @@ class SignDetector : public MarkerDetector {
   std::optional<cv::Rect> search_window_;  // where the sign was last seen, grown
   bool search_half_resolution_ = false;    // it was big there
   cv::Mat last_frame_;                     // the last frame the sign was found in (tracking)
-  cv::Matx33d last_plane_to_image_;        // ... and its aligned homography there
+  cv::Matx33d last_plane_to_image_;        // ... and its aligned homography there (raw pixels)
   cv::Size frame_size_;                    // size of the frames seen since the last reset
   bool last_tracked_ = false;
+  RectifiedPatches patches_;  // through a lens: the rectified views ECC aligns on
 };
 
 }  // namespace follow_bot

@@ -80,14 +80,15 @@ class TagDetector : public MarkerDetector {
   std::optional<Quad> findQuad(const cv::Mat& gray) const;
   // The quad found again on the rectified camera's image of the patch around `corners`
   // (rectified pixels) of the raw frame `raw`, or none when it is not found there.
-  std::optional<std::vector<cv::Point2d>> refitRectified(
-      const cv::Mat& raw, const CameraGeometry& camera,
-      const std::vector<cv::Point2d>& corners) const;
+  std::optional<std::vector<cv::Point2d>> refitRectified(const cv::Mat& raw,
+                                                         const CameraGeometry& camera,
+                                                         const std::vector<cv::Point2d>& corners);
 
   struct Impl;
   TagDetectorConfig config_;
   std::unique_ptr<Impl> impl_;
   std::optional<cv::Matx33d> previous_rotation_;
+  RectifiedPatches patches_;  // through a lens: the rectified patches refitRectified searches
 };
 
 }  // namespace follow_bot

@@ -21,10 +21,10 @@ std::string requireName(const char* name, const std::string& value) {
   return value.empty() ? std::string(name) + " must not be empty" : "";
 }
 
-// The blob of a colour when it is found and at least min_area big, else nullptr.
-const ColourBlob* seen(const BlobResult& blobs, const std::string& name, double min_area) {
+// The blob of a colour when it is found, else nullptr.
+const ColourBlob* seen(const BlobResult& blobs, const std::string& name) {
   const ColourBlob* blob = blobs.find(name);
-  if (blob == nullptr || !blob->found || blob->area < min_area) return nullptr;
+  if (blob == nullptr || !blob->found) return nullptr;
   if (!std::isfinite(blob->centroid.x) || !std::isfinite(blob->centroid.y)) return nullptr;
   return blob;
 }
@@ -95,30 +95,32 @@ std::optional<cv::Point3d> sphereCentreFromCircle(const CameraGeometry& camera,
   return centre;
 }
 
-namespace {
-
-// What the range estimates measure on a blob, in the rectified camera's pixels: a raw frame's
-// contour goes through the lens first, then the circle and width are those of the rectified
-// contour (without a lens, the blob's own).
-struct RectifiedBlob {
-  std::vector<cv::Point2d> contour;
-  cv::Point2d circle_centre;
-  double circle_radius = 0.0;
-  double width = 0.0;  // px, inclusive as a bounding box's
-};
-
-RectifiedBlob rectifiedBlob(const ColourBlob& blob, const CameraGeometry& camera) {
+RectifiedBlob rectifyBlob(const ColourBlob& blob, const CameraGeometry& camera,
+                          const cv::Size& frame_size) {
   RectifiedBlob rectified;
   const std::vector<cv::Point2d> raw(blob.contour.begin(), blob.contour.end());
   rectified.contour = rectifyPixels(camera, raw);
   if (!camera.lens) {
+    rectified.area = rectified.area_in_frame = blob.area;
+    rectified.centroid = blob.centroid;
     rectified.circle_centre = blob.circle_centre;
     rectified.circle_radius = blob.circle_radius;
     rectified.width = blob.bounding_box.width;
     return rectified;
   }
-  std::vector<cv::Point2f> contour(rectified.contour.begin(), rectified.contour.end());
-  if (contour.empty()) return rectified;
+  if (rectified.contour.empty()) return rectified;
+  // contourArea, moments and the hull take float points.
+  const std::vector<cv::Point2f> contour(rectified.contour.begin(), rectified.contour.end());
+  rectified.area = cv::contourArea(contour);
+  const cv::Moments moments = cv::moments(contour);
+  // Clamping a contour of points a pixel apart to the frame cuts it at the frame's edges to
+  // within a fraction of a pixel.
+  std::vector<cv::Point2f> inside_frame;
+  for (const cv::Point2f& point : contour) {
+    inside_frame.emplace_back(std::clamp(point.x, 0.0f, frame_size.width - 1.0f),
+                              std::clamp(point.y, 0.0f, frame_size.height - 1.0f));
+  }
+  rectified.area_in_frame = cv::contourArea(inside_frame);
   cv::Point2f centre;
   float radius = 0.0f;
   std::vector<cv::Point2f> hull;
@@ -126,6 +128,10 @@ RectifiedBlob rectifiedBlob(const ColourBlob& blob, const CameraGeometry& camera
   cv::minEnclosingCircle(hull, centre, radius);
   rectified.circle_centre = centre;
   rectified.circle_radius = radius;
+  // As the detector: a zero-area contour has no moment centroid.
+  rectified.centroid = moments.m00 > 0.0
+                           ? cv::Point2d(moments.m10 / moments.m00, moments.m01 / moments.m00)
+                           : rectified.circle_centre;
   const auto [left, right] =
       std::minmax_element(rectified.contour.begin(), rectified.contour.end(),
                           [](const cv::Point2d& a, const cv::Point2d& b) { return a.x < b.x; });
@@ -133,15 +139,13 @@ RectifiedBlob rectifiedBlob(const ColourBlob& blob, const CameraGeometry& camera
   return rectified;
 }
 
-}  // namespace
-
 RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_height,
                             const CameraGeometry& camera, const BeaconObject& object) {
   RangeEstimate estimate;
   if (!blob.found || !(object.size_m > 0.0)) return estimate;
   // Cut by the frame's edges: the raw box against the raw frame.
   const cv::Rect& box = blob.bounding_box;
-  const RectifiedBlob rectified = rectifiedBlob(blob, camera);
+  const RectifiedBlob rectified = rectifyBlob(blob, camera, cv::Size(image_width, image_height));
   const bool cut_left = box.x <= 0;
   const bool cut_right = box.x + box.width >= image_width;
   const bool cut_top = box.y <= 0;
@@ -229,6 +233,8 @@ std::string validate(const BeaconControllerConfig& c) {
            requirePositive("max_angular", c.max_angular),
            requirePositive("distance_tolerance", c.distance_tolerance),
            requirePositive("bearing_tolerance", c.bearing_tolerance),
+           requireAtLeast("distance_release", c.distance_release, c.distance_tolerance),
+           requireAtLeast("bearing_release", c.bearing_release, c.bearing_tolerance),
            requireAtLeast("lost_hold", c.lost_hold, 0.0),
        }) {
     if (!error.empty()) return error;
@@ -275,7 +281,9 @@ Twist2D BeaconController::update(const BlobResult& blobs, double stamp) {
 }
 
 Twist2D BeaconController::followGreenStopRed(const BlobResult& blobs, double stamp) {
-  if (seen(blobs, config_.stop_colour, config_.stop_min_area) != nullptr) {
+  const cv::Size frame(blobs.image_width, blobs.image_height);
+  const ColourBlob* stop = seen(blobs, config_.stop_colour);
+  if (stop != nullptr && rectifyBlob(*stop, config_.camera, frame).area >= config_.stop_min_area) {
     stop_seen_ = true;
     stop_last_seen_ = stamp;
   }
@@ -284,12 +292,13 @@ Twist2D BeaconController::followGreenStopRed(const BlobResult& blobs, double sta
     return Twist2D();
   }
 
-  const ColourBlob* target = seen(blobs, config_.follow_colour, 0.0);
-  if (target == nullptr || blobs.image_width <= 0) return search();
+  const ColourBlob* found = seen(blobs, config_.follow_colour);
+  if (found == nullptr || blobs.image_width <= 0) return search();
+  const RectifiedBlob target = rectifyBlob(*found, config_.camera, frame);
   const double half_width = 0.5 * blobs.image_width;
-  const double error = std::clamp((target->centroid.x - half_width) / half_width, -1.0, 1.0);
+  const double error = std::clamp((target.centroid.x - half_width) / half_width, -1.0, 1.0);
   if (error != 0.0) search_direction_ = error > 0.0 ? -1.0 : 1.0;
-  if (target->area >= config_.close_area) {
+  if (target.area_in_frame >= config_.close_area) {
     state_ = BeaconState::kHolding;
     return Twist2D();
   }
@@ -298,7 +307,7 @@ Twist2D BeaconController::followGreenStopRed(const BlobResult& blobs, double sta
 }
 
 Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
-  const ColourBlob* target = seen(blobs, config_.target_colour, 0.0);
+  const ColourBlob* target = seen(blobs, config_.target_colour);
   if (target == nullptr) {
     last_range_.reset();
     last_bearing_.reset();
@@ -327,8 +336,11 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
   last_range_ = range;
   last_bearing_ = bearing;
 
-  if (range && std::abs(*range - config_.stop_distance) < config_.distance_tolerance &&
-      std::abs(bearing) < config_.bearing_tolerance) {
+  const bool arrived = state_ == BeaconState::kArrived;
+  const double distance_bound = arrived ? config_.distance_release : config_.distance_tolerance;
+  const double bearing_bound = arrived ? config_.bearing_release : config_.bearing_tolerance;
+  if (range && std::abs(*range - config_.stop_distance) < distance_bound &&
+      std::abs(bearing) < bearing_bound) {
     state_ = BeaconState::kArrived;
     return Twist2D();
   }

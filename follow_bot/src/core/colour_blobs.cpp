@@ -1,6 +1,7 @@
 #include "follow_bot/colour_blobs.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -85,10 +86,87 @@ std::string validate(const ColourBlobConfig& config) {
            checkKernel("open_kernel", config.open_kernel),
            checkKernel("close_kernel", config.close_kernel),
            requireAtLeast("min_area", config.min_area, 0.0),
+           requireInRange("roundness_tolerance", config.roundness_tolerance, 0.0, 1.0),
        }) {
     if (!error.empty()) return error;
   }
+  if (const auto& ball = config.floor_ball) {
+    for (const std::string& error : {
+             requirePositive("floor_ball.radius_m", ball->radius_m),
+             requireInRange("floor_ball.tolerance", ball->tolerance, 0.0, 1.0),
+         }) {
+      if (!error.empty()) return error;
+    }
+    if (const std::string error = validate(ball->camera); !error.empty()) {
+      return "floor_ball.camera: " + error;
+    }
+  }
   return "";
+}
+
+std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Size image) {
+  // x^2 + y^2 + D x + E y + F = 0 in the least-squares sense: linear in (D, E, F).
+  std::vector<cv::Point2d> arc;
+  for (const cv::Point& p : contour) {
+    if (p.x > 0 && p.y > 0 && p.x < image.width - 1 && p.y < image.height - 1) arc.push_back(p);
+  }
+  constexpr std::size_t kMinPoints = 5;
+  if (arc.size() < kMinPoints) return std::nullopt;
+  cv::Mat a(static_cast<int>(arc.size()), 3, CV_64F);
+  cv::Mat b(static_cast<int>(arc.size()), 1, CV_64F);
+  for (int i = 0; i < a.rows; ++i) {
+    const cv::Point2d& p = arc[i];
+    a.at<double>(i, 0) = p.x;
+    a.at<double>(i, 1) = p.y;
+    a.at<double>(i, 2) = 1.0;
+    b.at<double>(i) = -(p.x * p.x + p.y * p.y);
+  }
+  const cv::SVD svd(a);
+  // Rank < 3: the pixels lie on one line, which fits no circle.
+  if (svd.w.at<double>(2) <= 1e-9 * svd.w.at<double>(0)) return std::nullopt;
+  cv::Mat def;
+  svd.backSubst(b, def);
+  CircleFit fit;
+  fit.centre = {-def.at<double>(0) / 2.0, -def.at<double>(1) / 2.0};
+  const double radius_squared = fit.centre.dot(fit.centre) - def.at<double>(2);
+  if (!(radius_squared > 0.0) || !std::isfinite(radius_squared)) return std::nullopt;
+  fit.radius = std::sqrt(radius_squared);
+  double sum_squared = 0.0;
+  for (const cv::Point2d& p : arc) {
+    const double error = cv::norm(p - fit.centre) - fit.radius;
+    sum_squared += error * error;
+  }
+  fit.rms_error = std::sqrt(sum_squared / static_cast<double>(arc.size()));
+  return fit;
+}
+
+std::optional<double> floorBallRadius(const CameraGeometry& camera, const cv::Point2d& centre,
+                                      double radius_px) {
+  if (!(radius_px > 0.0) || !std::isfinite(centre.x) || !std::isfinite(centre.y)) {
+    return std::nullopt;
+  }
+  // The circle's ends on the line from the principal point through its centre (any line when
+  // the centre is the principal point), as rays of the rectified camera (x right, y down, z
+  // along the optical axis).
+  const cv::Point2d principal(camera.cx, camera.cy);
+  cv::Point2d along = centre - principal;
+  const double offset = cv::norm(along);
+  along = offset > 1e-9 ? along / offset : cv::Point2d(0.0, 1.0);
+  const auto ray = [&](const cv::Point2d& raw) {
+    const cv::Point2d p = rectifyPixel(camera, raw);
+    return cv::normalize(
+        cv::Vec3d((p.x - camera.cx) / camera.fx, (p.y - camera.cy) / camera.fy, 1.0));
+  };
+  const cv::Vec3d near = ray(centre - radius_px * along);
+  const cv::Vec3d far = ray(centre + radius_px * along);
+  const double alpha = 0.5 * std::acos(std::clamp(near.dot(far), -1.0, 1.0));
+  const cv::Vec3d axis = cv::normalize(near + far);
+  const double sin_theta =
+      axis[1] * std::cos(camera.pitch_rad) + axis[2] * std::sin(camera.pitch_rad);
+  const double denominator = 1.0 + sin_theta / std::sin(alpha);
+  if (!(alpha > 0.0) || !(denominator > 0.0)) return std::nullopt;
+  const double radius = camera.height_m / denominator;
+  return std::isfinite(radius) ? std::optional<double>(radius) : std::nullopt;
 }
 
 const ColourBlob* BlobResult::find(const std::string& name) const {
@@ -160,7 +238,7 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
     const std::vector<cv::Point>* largest = nullptr;
     for (const std::vector<cv::Point>& contour : contours) {
       const double area = cv::contourArea(contour);
-      if (area < config_.min_area) continue;
+      if (area < config_.min_area || !beaconShaped(contour, bgr.size())) continue;
       ++blob.blob_count;
       if (largest == nullptr || area > blob.area) {
         largest = &contour;
@@ -183,6 +261,22 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
     blob.contour = *largest;
   }
   return result;
+}
+
+bool ColourBlobDetector::beaconShaped(const std::vector<cv::Point>& contour, cv::Size image) const {
+  const bool round_gate = config_.roundness_tolerance > 0.0;
+  if (!round_gate && !config_.floor_ball) return true;
+  const std::optional<CircleFit> fit = fitCircle(contour, image);
+  if (!fit) return true;
+  constexpr double kQuantisationPx = 1.0;
+  if (round_gate && fit->rms_error > kQuantisationPx + config_.roundness_tolerance * fit->radius) {
+    return false;
+  }
+  if (!config_.floor_ball) return true;
+  const ColourBlobConfig::FloorBall& ball = *config_.floor_ball;
+  // Boundary pixel centres lie half a pixel inside the silhouette's edge.
+  const std::optional<double> radius = floorBallRadius(ball.camera, fit->centre, fit->radius + 0.5);
+  return radius && std::abs(*radius - ball.radius_m) <= ball.tolerance * ball.radius_m;
 }
 
 cv::Mat ColourBlobDetector::mask(const cv::Mat& bgr, const std::string& name) const {

@@ -353,15 +353,13 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   // The lecture's moments, divided by 255: m00 = count, m10 = sum_x, m01 = sum_y.
   BandSums sums;
   for (int y = result.row_begin; y < result.row_end; ++y) {
-    int row_count = 0;
-    std::int64_t row_sum_x = 0;
+    RowSums row;
     uchar* mask_row = mask.empty() ? nullptr : mask.ptr<uchar>(y - result.row_begin);
     visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols, [&](int x, bool is_line) {
-      row_count += is_line ? 1 : 0;
-      row_sum_x += is_line ? x : 0;
+      row.add(x, is_line);
       if (mask_row != nullptr) mask_row[x] = is_line ? 255 : 0;
     });
-    sums.addRow(y, row_count, row_sum_x);
+    sums.addRow(y, row, bgr.cols);
   }
   if (!mask.empty() && sums.count > 0) {
     sums = nearestBlobSums(mask, result.row_begin, *expected_x).value_or(sums);
@@ -395,18 +393,38 @@ std::optional<LineDetector::BandSums> LineDetector::nearestBlobSums(const cv::Ma
   BandSums sums;
   for (int y = 0; y < labels.rows; ++y) {
     const int* label_row = labels.ptr<int>(y);
-    int row_count = 0;
-    std::int64_t row_sum_x = 0;
-    for (int x = 0; x < labels.cols; ++x) {
-      row_count += label_row[x] == best ? 1 : 0;
-      row_sum_x += label_row[x] == best ? x : 0;
-    }
-    sums.addRow(row_begin + y, row_count, row_sum_x);
+    RowSums row;
+    for (int x = 0; x < labels.cols; ++x) row.add(x, label_row[x] == best);
+    sums.addRow(row_begin + y, row, labels.cols);
   }
   return sums;
 }
 
+void LineDetector::BandSums::addRow(int y, const RowSums& row, int image_width) {
+  count += row.count;
+  sum_x += row.sum_x;
+  sum_y += static_cast<std::int64_t>(row.count) * y;
+  occupied_rows += row.count > 0 ? 1 : 0;
+  // The cut runs: columns [0, left_run) and [right_begin, image_width); a run across the
+  // whole row is the left one.
+  const int right_begin =
+      row.last == image_width - 1 ? std::max(row.run_begin, row.left_run) : image_width;
+  const auto column_sum = [](std::int64_t begin, std::int64_t end) {
+    return (begin + end - 1) * (end - begin) / 2;
+  };
+  const int whole = row.count - row.left_run - (image_width - right_begin);
+  whole_count += whole;
+  whole_sum_x += row.sum_x - column_sum(0, row.left_run) - column_sum(right_begin, image_width);
+  whole_sum_y += static_cast<std::int64_t>(whole) * y;
+}
+
 void LineDetector::fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const {
+  result->centre_pixel_count = static_cast<int>(sums.whole_count);
+  if (sums.whole_count > 0) {
+    result->centre_found = sums.whole_count >= config_.min_pixels;
+    result->centre_x = static_cast<double>(sums.whole_sum_x) / sums.whole_count;
+    result->centre_y = static_cast<double>(sums.whole_sum_y) / sums.whole_count;
+  }
   result->pixel_count = static_cast<int>(sums.count);
   if (sums.count == 0) return;
 

@@ -422,9 +422,14 @@ void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
   const auto seen = [&](const BandMeasurement& band) {
     return band.found && band.confidence >= config_.min_confidence;
   };
-  const bool near = seen(measurement.band) && rememberBand(measurement.band, false, stamp);
-  const bool ahead =
-      seen(measurement.look_ahead) && rememberBand(measurement.look_ahead, true, stamp);
+  const bool near = seen(measurement.band);
+  const bool ahead = seen(measurement.look_ahead);
+  // Only a band holding whole runs of the line knows where its centre is (centre_x); a line cut
+  // by the image's side edge is remembered from the frames that see it whole, and is still a
+  // sighting for the fallback.
+  if (near && measurement.band.centre_found) rememberBand(measurement.band, false, stamp);
+  if (ahead && measurement.look_ahead.centre_found)
+    rememberBand(measurement.look_ahead, true, stamp);
   while (points_.size() > static_cast<size_t>(config_.path.max_points)) points_.pop_front();
   if (!near && !ahead) return;
   last_sighting_ = measurement;
@@ -433,23 +438,22 @@ void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
   if (!near) last_sighting_.band = measurement.look_ahead;
 }
 
-bool PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {
-  // A raw frame's centroid goes through the lens first (rectifyPixel: unchanged without one).
-  const cv::Point2d pixel = rectifyPixel(camera_, {band.centroid_x, band.centroid_y});
+void PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {
+  // A raw frame's pixel goes through the lens first (rectifyPixel: unchanged without one).
+  const cv::Point2d pixel = rectifyPixel(camera_, {band.centre_x, band.centre_y});
   const std::optional<cv::Point2d> ground = pixelToGround(camera_, pixel.x, pixel.y);
-  if (!ground) return false;
+  if (!ground) return;
   const auto latest_of_band =
       std::find_if(points_.rbegin(), points_.rend(),
                    [&](const PathPoint& point) { return point.look_ahead == look_ahead; });
   if (latest_of_band != points_.rend()) {
     const cv::Point2d step = *ground - latest_of_band->position;
     const double spacing = config_.path.min_point_spacing;
-    if (step.dot(step) < spacing * spacing) return true;
+    if (step.dot(step) < spacing * spacing) return;
     const double gap = config_.path.bridge_gap;
     if (!look_ahead && step.dot(step) >= gap * gap) startBridge(*latest_of_band, *ground, stamp);
   }
   points_.push_back(PathPoint{*ground, stamp, look_ahead});
-  return true;
 }
 
 void PathLaw::startBridge(const PathPoint& before, const cv::Point2d& after, double stamp) {

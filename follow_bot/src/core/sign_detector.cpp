@@ -147,8 +147,8 @@ SignDetector::SignDetector(const SignDetectorConfig& config) : config_(config) {
   }
 }
 
-bool SignDetector::refineHomography(const cv::Mat& gray, int iterations,
-                                    cv::Matx33d& plane_to_image) const {
+bool SignDetector::refineHomography(const cv::Mat& gray, const CameraGeometry& camera,
+                                    int iterations, cv::Matx33d& plane_to_image) {
   // Render the sign as the camera would see it under the current homography (area-sampled like
   // a sensor pixel), then align the camera image to that rendering with ECC. Aligning against a
   // picture with the same perspective and blur everywhere is what makes the refinement unbiased:
@@ -166,7 +166,9 @@ bool SignDetector::refineHomography(const cv::Mat& gray, int iterations,
   roi.height -= roi.height % f;
   const cv::Size size(roi.width / f, roi.height / f);
   if (size.width < 16 || size.height < 16) return false;
-  cv::Mat camera_view = gray(roi);
+  // Through a lens, the rectified camera's view: a homography cannot follow the raw frame's
+  // bent edges (aligned on raw frames, signs at 1-2 m came out ~6 mm off).
+  cv::Mat camera_view = camera.lens ? patches_.patch(gray, camera, roi) : gray(roi);
   if (f > 1) cv::resize(camera_view, camera_view, size, 0, 0, cv::INTER_AREA);
   // Image pixel p to aligned pixel (p - roi + 0.5) / f - 0.5 (pixel centres at integers).
   const double inv_f = 1.0 / f;
@@ -419,15 +421,25 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
   const std::vector<cv::Point2f> inlier_image = rectifyPixels(camera, matches.image);
 
   // Pose points: a grid over the sign mapped by the ECC-refined homography, or else the inlier
-  // keypoints themselves. A second pass renders from the first pass's better homography.
+  // keypoints themselves. A second pass renders from the first pass's better homography. The
+  // homography is the rectified camera's: through a lens, the one through the rectified inliers.
   cv::Matx33d plane_to_image = matches.plane_to_image;
+  if (camera.lens) {
+    std::vector<cv::Point2f> inlier_plane;
+    for (const cv::Point3f& p : inlier_object) inlier_plane.emplace_back(p.x, p.y);
+    const cv::Mat through_inliers = cv::findHomography(inlier_plane, inlier_image);
+    if (through_inliers.empty()) return std::nullopt;
+    plane_to_image = cv::Matx33d(through_inliers.ptr<double>());
+  }
   std::vector<cv::Point3f> pose_object = inlier_object;
   std::vector<cv::Point2f> pose_image = inlier_image;
   // Only the alignment to the reference vouches for a tracked homography.
   const int wanted = tracked ? config_.track_refine_passes : config_.refine_passes;
   const int iterations = tracked ? config_.track_refine_iterations : config_.refine_iterations;
   int passes = 0;
-  while (passes < wanted && refineHomography(gray, iterations, plane_to_image)) ++passes;
+  while (passes < wanted && refineHomography(gray, camera, iterations, plane_to_image)) {
+    ++passes;
+  }
   if (tracked && passes < wanted) return std::nullopt;
   if (passes > 0) {
     pose_object.clear();
@@ -439,7 +451,6 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
       }
     }
     cv::perspectiveTransform(grid, pose_image, cv::Mat(plane_to_image));
-    pose_image = rectifyPixels(camera, pose_image);
   }
 
   // Planar pose: IPPE gives both solutions of the plane's two-fold ambiguity, best first.
@@ -488,6 +499,18 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
   observation.quality = static_cast<double>(inlier_image.size());
   previous_rotation_ = observation.rotation;
   last_plane_to_image_ = plane_to_image;
+  if (camera.lens) {  // tracking works on raw frames: the homography closest to the lens there
+    std::vector<cv::Point2d> grid, rectified;
+    for (double fy = -0.5; fy <= 0.5; fy += 0.125) {
+      for (double fx = -0.5; fx <= 0.5; fx += 0.125) {
+        grid.emplace_back(fx * config_.width_m, fy * height_m_);
+      }
+    }
+    cv::perspectiveTransform(grid, rectified, plane_to_image);
+    const cv::Mat raw = cv::findHomography(grid, unrectifyPixels(camera, rectified));
+    if (raw.empty()) return std::nullopt;
+    last_plane_to_image_ = cv::Matx33d(raw.ptr<double>());
+  }
   // Next search window: the sign's box grown by half its size and kSearchMarginPx each way,
   // enough for a turn at the robot's top rate between two frames. A big sign has plenty of
   // keypoints at half resolution (the alignment restores the accuracy) for a quarter of the cost.

@@ -209,8 +209,7 @@ std::optional<TagDetector::Quad> TagDetector::findQuad(const cv::Mat& gray) cons
 }
 
 std::optional<std::vector<cv::Point2d>> TagDetector::refitRectified(
-    const cv::Mat& raw, const CameraGeometry& camera,
-    const std::vector<cv::Point2d>& corners) const {
+    const cv::Mat& raw, const CameraGeometry& camera, const std::vector<cv::Point2d>& corners) {
   // The rectified camera's pixels around the quad, with a margin of a quarter of its size (the
   // white border apriltag needs around the black square, and the corners' movement).
   cv::Point2d low = corners.front(), high = corners.front();
@@ -229,14 +228,7 @@ std::optional<std::vector<cv::Point2d>> TagDetector::refitRectified(
                             static_cast<int>(std::floor(patch_bounds.y)),
                             static_cast<int>(std::ceil(patch_bounds.width)),
                             static_cast<int>(std::ceil(patch_bounds.height)));
-  const CameraLens& lens = *camera.lens;
-  const cv::Matx33d patch_camera(camera.fx, 0.0, camera.cx - patch_rect.x, 0.0, camera.fy,
-                                 camera.cy - patch_rect.y, 0.0, 0.0, 1.0);
-  cv::Mat map, map_fraction, patch;
-  cv::initUndistortRectifyMap(lens.camera_matrix, lens.distortion, lens.rectification, patch_camera,
-                              patch_rect.size(), CV_16SC2, map, map_fraction);
-  cv::remap(raw, patch, map, map_fraction, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-  std::optional<Quad> quad = findQuad(patch);
+  std::optional<Quad> quad = findQuad(patches_.patch(raw, camera, patch_rect));
   if (!quad) return std::nullopt;
   for (cv::Point2d& corner : quad->corners) corner += cv::Point2d(patch_rect.tl());
   return quad->corners;

@@ -64,12 +64,24 @@ BeaconChaserSettings beaconChaserSettings(const BeaconChaserConfig& cfg,
     colour.v_min = cfg.v_min;
   }
   detector.min_area = cfg.min_area;
+  const BeaconMode mode =
+      parseChoice("mode", cfg.mode, parseBeaconMode, "'follow_green_stop_red' or 'approach'");
+  // Lab 5's beacons are balls; an approached box is not round.
+  const bool box_target =
+      mode == BeaconMode::kApproach && startup.target.shape == BeaconShape::kBox;
+  detector.roundness_tolerance = box_target ? 0.0 : cfg.roundness_tolerance;
+  // Balls rest on the floor: follow mode's are ~ball_radius, an approached sphere is the target.
+  const double ball_radius =
+      mode == BeaconMode::kApproach ? (box_target ? 0.0 : startup.target.size_m) : cfg.ball_radius;
+  if (ball_radius > 0.0) {
+    detector.floor_ball =
+        ColourBlobConfig::FloorBall{ball_radius, cfg.ball_size_tolerance, startup.camera};
+  }
   requireValid({validate(detector)});
 
   BeaconControllerConfig& controller = settings.controller;
   controller = startup;
-  controller.mode =
-      parseChoice("mode", cfg.mode, parseBeaconMode, "'follow_green_stop_red' or 'approach'");
+  controller.mode = mode;
   // Checked in every mode: a typo is a typo.
   controller.follow_colour = colourName("follow_colour", cfg.follow_colour);
   controller.stop_colour = colourName("stop_colour", cfg.stop_colour);

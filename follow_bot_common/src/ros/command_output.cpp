@@ -36,7 +36,7 @@ VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse)
 CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse)
     : limiter_(readLimits(pnh, allow_reverse)),
       watchdog_(positiveParam(pnh, "watchdog_timeout", Defaults::watchdog_timeout)),
-      wall_watchdog_(watchdog_.timeout()),
+      wall_watchdog_(positiveParam(pnh, "wall_watchdog_timeout", Defaults::wall_watchdog_timeout)),
       updater_(nh, pnh, pnh.getNamespace()),
       expected_rate_(positiveParam(pnh, "expected_frame_rate", Defaults::expected_frame_rate)) {
   publisher_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
@@ -52,7 +52,7 @@ CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool all
   // Four checks per timeout bound the stop delay to 1.25 timeouts (on sim or wall time).
   timer_ =
       nh.createTimer(ros::Duration(watchdog_.timeout() / 4.0), &CommandOutput::checkWatchdog, this);
-  wall_timer_ = nh.createSteadyTimer(ros::WallDuration(watchdog_.timeout() / 4.0),
+  wall_timer_ = nh.createSteadyTimer(ros::WallDuration(wall_watchdog_.timeout() / 4.0),
                                      &CommandOutput::checkWallWatchdog, this);
 }
 
@@ -90,7 +90,7 @@ void CommandOutput::reportStatus(diagnostic_updater::DiagnosticStatusWrapper& st
   if (outage_stopped_) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR,
                     "stopped by the watchdog: no camera frame for %.2f s (%s time)",
-                    watchdog_.timeout(), last_stop_clock_.c_str());
+                    last_stop_timeout_, last_stop_clock_.c_str());
   } else if (dropped_since_report_ > 0) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%ld frames dropped since last report",
                     dropped_since_report_);
@@ -109,6 +109,7 @@ void CommandOutput::reportStatus(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("watchdog stops", watchdog_stops_);
   status.add("last watchdog stop clock", last_stop_clock_);
   status.add("watchdog timeout (s)", watchdog_.timeout());
+  status.add("wall watchdog timeout (s)", wall_watchdog_.timeout());
 }
 
 Twist2D CommandOutput::send(const std_msgs::Header& frame, const Twist2D& desired, bool active,
@@ -193,7 +194,7 @@ void CommandOutput::checkWatchdogNow() {
     watchdog_.frameArrived(std::max(watchdog_.lastFrame(), now - period));
   }
   frames_since_check_ = 0;
-  if (watchdog_.shouldSendStop(now)) stopForOutage("ROS", watchdog_.lastFrame(), now);
+  if (watchdog_.shouldSendStop(now)) stopForOutage("ROS", watchdog_, now);
   updater_.update();
 }
 
@@ -208,19 +209,20 @@ void CommandOutput::checkWallWatchdog(const ros::SteadyTimerEvent&) {
       return;
     }
     if (now - ros_time_moved_at_ <= wall_watchdog_.timeout()) return;
-    if (wall_watchdog_.shouldSendStop(now)) stopForOutage("wall", wall_watchdog_.lastFrame(), now);
+    if (wall_watchdog_.shouldSendStop(now)) stopForOutage("wall", wall_watchdog_, now);
   });
 }
 
-void CommandOutput::stopForOutage(const char* clock, double since, double now) {
+void CommandOutput::stopForOutage(const char* clock, const FrameWatchdog& watchdog, double now) {
   if (outage_stopped_) return;
   outage_stopped_ = true;
   if (quiet_) return;  // already stopped (idle or disabled): nothing to take back
   ++watchdog_stops_;
   last_stop_clock_ = clock;
+  last_stop_timeout_ = watchdog.timeout();
   ROS_WARN(
       "no camera frame since t=%.3f s (now %.3f s %s time, timeout %.2f s): stopping the robot",
-      since, now, clock, watchdog_.timeout());
+      watchdog.lastFrame(), now, clock, watchdog.timeout());
   stopLocked();
   updater_.force_update();  // say why at once (a stopped /clock would hold back update())
 }

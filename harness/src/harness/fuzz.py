@@ -24,15 +24,18 @@ import threading
 import time
 import zlib
 from dataclasses import dataclass, field
+from functools import cache
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from follow_bot import core
+from follow_bot.cfg import BeaconChaserConfig
 from harness.apriltag_image import tag_image
+from harness.render import Renderer
 from harness.run_scenario import free_port, stop, wait_for_port
-from harness.world import package_dir
+from harness.world import package_dir, parse_world
 
 SIGN_IMAGE = package_dir("follow_bot") / "assets" / "parking_sign.png"
 SIGN_WIDTH_M = 0.40
@@ -45,6 +48,11 @@ LIMIT_ANGULAR = core.VelocityLimiterConfig().max_angular
 WIDTH, HEIGHT = 640, 480
 FX = 554.2562584220408
 MAX_STAMP_SEC = 2**32 - 1
+# The beacon nodes' balls (BeaconChaser.cfg ~ball_radius; the approach node's sphere target is
+# given the same ~target_size): the size gate takes only a blob a ball of this radius resting on
+# the floor would make. The probe's ball stands this far straight ahead, wholly in view.
+BALL_RADIUS_M = BeaconChaserConfig.defaults["ball_radius"]
+PROBE_BALL_DISTANCE_M = 3.0
 
 
 @dataclass(frozen=True)
@@ -78,7 +86,12 @@ NODES: dict[str, NodeSpec] = {
     "beacon_approach": NodeSpec(
         "follow_bot",
         "beacon_chaser",
-        {**PARAMS_MOUNTING, "mode": "approach", "target_shape": "sphere", "target_size": 0.2},
+        {
+            **PARAMS_MOUNTING,
+            "mode": "approach",
+            "target_shape": "sphere",
+            "target_size": BALL_RADIUS_M,
+        },
         probe="green",
     ),
     "parker_tag": NodeSpec("follow_bot", "parker", PARAMS_MOUNTING, probe="tag"),
@@ -351,13 +364,37 @@ def floor(colour=(120, 120, 120)) -> np.ndarray:
     return np.full((HEIGHT, WIDTH, 3), colour, np.uint8)
 
 
+@cache
+def ball_frame() -> np.ndarray:
+    """A green ball of the beacon nodes' radius on the floor straight ahead (its centroid in the
+    middle column), rendered for the camera as the nodes are mounted: PARAMS_MOUNTING without
+    ~camera_height or ~camera_pitch_deg, so the core's default mounting."""
+    mounting = core.CameraGeometry()
+    world = parse_world({
+        "name": "probe_ball",
+        "ground": {"size": [8.0, 8.0], "metres_per_pixel": 0.01},
+        "objects": [{
+            "kind": "sphere", "name": "green", "colour": [0, 200, 0], "radius": BALL_RADIUS_M,
+            "position": [PROBE_BALL_DISTANCE_M, 0.0, BALL_RADIUS_M],
+        }],
+        "lighting": {"shadows": False},
+        "camera": {
+            "width": WIDTH, "height": HEIGHT, "height_m": mounting.height_m,
+            "pitch_deg": math.degrees(mounting.pitch_rad), "x_offset_m": mounting.x_offset_m,
+        },
+    })  # fmt: skip
+    image = Renderer(world).render((0.0, 0.0, 0.0), frame=0)
+    image.flags.writeable = False
+    return image
+
+
 def probe_frame(probe: str):
     """The valid frame whose answer proves a node still works."""
     image = floor()
     if probe == "line":
         image[:, WIDTH // 2 - 8 : WIDTH // 2 + 8] = (0, 220, 255)
     elif probe == "green":
-        cv2.circle(image, (WIDTH // 2, HEIGHT // 2), 40, (0, 200, 0), cv2.FILLED)
+        image = ball_frame()
     elif probe == "tag":
         image = floor((255, 255, 255))
         tag = tag_image()  # 10x10 cells, 8 of them the black square

@@ -18,6 +18,14 @@ Z_95 = 1.959963984540054  # standard normal quantile for a two-sided 95 % interv
 QUANTILES = (0.0, 0.05, 0.25, 0.5, 0.75, 0.95, 1.0)
 QUANTILE_NAMES = tuple(f"q{round(100 * q):02d}" for q in QUANTILES)  # q00 = min, q100 = max
 WORST_RUNS = 10  # how many of the worst runs the report lists
+# Measured on the wall clock, so they differ from play to play; every other metric of a lockstep
+# run repeats exactly (the same record, whatever the machine's load).
+WALL_CLOCK_METRICS = ("wall_time", "loop_wall_time")
+
+
+def without_wall_clock(metrics: dict) -> dict:
+    """A run's metrics without WALL_CLOCK_METRICS: what a replay of the run must repeat."""
+    return {k: v for k, v in metrics.items() if k not in WALL_CLOCK_METRICS}
 
 
 def wilson_interval(successes: int, runs: int, z: float = Z_95) -> tuple[float, float]:

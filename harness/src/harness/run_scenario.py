@@ -29,8 +29,10 @@ import time
 import xmlrpc.client
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
+import roslaunch.rlutil
 import yaml
 from tqdm import tqdm
 
@@ -125,6 +127,12 @@ def stop(*processes: subprocess.Popen | None, timeout: float = 10.0) -> None:
             process.wait()
 
 
+def declared_args(package: str, launch_file: str) -> set[str]:
+    """The names of the args a launch file declares at its top level."""
+    path = roslaunch.rlutil.resolve_launch_arguments([package, launch_file])[0]
+    return {arg.get("name") for arg in ElementTree.parse(path).getroot().findall("arg")}
+
+
 def behaviour_command(scenario: Scenario) -> list[str]:
     if scenario.behaviour is None:
         v, w = scenario.constant_command
@@ -133,6 +141,11 @@ def behaviour_command(scenario: Scenario) -> list[str]:
     # The run's robot description comes from its world (description_command), not the launch's:
     # the node under test finds its camera's mounting in tf, as on a robot, never in ~params.
     args = {"robot_description": "false", **b.args}
+    if scenario.lockstep and "wall_watchdog_timeout" in declared_args(b.package, b.launch_file):
+        # The simulator holds /clock while it renders a step, which on a loaded machine can take
+        # longer than the behaviours' wall-clock watchdog (0.15 s): a slow step is not a dead
+        # simulator. Lockstep allows reply_timeout of wall time per step, both ways.
+        args.setdefault("wall_watchdog_timeout", str(scenario.reply_timeout))
     launch = ["roslaunch", "--wait", b.package, b.launch_file]
     return launch + [f"{k}:={v}" for k, v in args.items()]
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,14 +19,19 @@ enum class Detector { kOrb, kSift };
 // "orb" or "sift" (lower case); false for anything else.
 bool parseDetector(const std::string& name, Detector& detector);
 std::string detectorName(Detector detector);
-// At compile time, of the names cfg/Matching.cfg allows: sift or else orb.
+// At compile time: "orb" or "sift". Any other name throws, which in a constant expression is a
+// compile error, so a new name in cfg/Matching.cfg cannot silently mean one of these.
 constexpr Detector detectorNamed(std::string_view name) {
-  return name == "sift" ? Detector::kSift : Detector::kOrb;
+  if (name == "orb") return Detector::kOrb;
+  if (name == "sift") return Detector::kSift;
+  throw std::invalid_argument("no such detector");
 }
+// cfg/Matching.cfg's default detector (MatchingDefaults, generated), evaluated at compile time.
+inline constexpr Detector kDefaultDetector = detectorNamed(MatchingDefaults::detector);
 
 // Defaults of detector and min_inliers: cfg/Matching.cfg's (MatchingDefaults, generated).
 struct MatchOptions {
-  Detector detector = detectorNamed(MatchingDefaults::detector);
+  Detector detector = kDefaultDetector;
   int max_features = 4000;           // keypoints kept per image
   double ratio = 0.75;               // Lowe's ratio test: best / second-best distance below this
   double ransac_threshold_px = 3.0;  // inlier tolerance of the RANSAC homography

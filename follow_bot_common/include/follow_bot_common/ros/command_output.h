@@ -32,11 +32,12 @@ namespace follow_bot {
 // nothing until frames return; the destructor publishes a last zero and holds the publisher
 // 0.1 s of wall time so that it leaves. The watchdogs:
 //  * ROS time: no frame for ~watchdog_timeout of ROS time (sim time under use_sim_time).
-//  * Wall (steady) time: no frame for ~watchdog_timeout of wall time while ROS time has not
-//    advanced for ~watchdog_timeout of wall time either. With use_sim_time, when /clock and the
-//    frames stop together (the simulator or rosbag died), ROS time stands still and the first rule
-//    never fires. A running ROS clock leaves the decision to the first rule (sim time may run at
-//    any rate).
+//  * Wall (steady) time: no frame for ~wall_watchdog_timeout of wall time while ROS time has not
+//    advanced for that long of wall time either. With use_sim_time, when /clock and the frames
+//    stop together (the simulator or rosbag died), ROS time stands still and the first rule never
+//    fires. A running ROS clock leaves the decision to the first rule (sim time may run at any
+//    rate). A lockstep simulator holds /clock while it renders, so it sets this timeout above its
+//    longest step: a slow step is not an outage.
 //
 // Diagnostics: one diagnostic_updater status per node on /diagnostics ("<node>: behaviour"):
 // frame rate against ~expected_frame_rate (Hz, 30; +-20 %), frames accepted, frames dropped
@@ -45,8 +46,9 @@ namespace follow_bot {
 //
 // Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
 // ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
-// ~watchdog_timeout (s, 0.15). Invalid values throw std::invalid_argument. Negative linear
-// commands are clamped to 0 unless `allow_reverse` (a behaviour that must back up, the parker).
+// ~watchdog_timeout (s, 0.15), ~wall_watchdog_timeout (s, 0.15). Invalid values throw
+// std::invalid_argument. Negative linear commands are clamped to 0 unless `allow_reverse` (a
+// behaviour that must back up, the parker).
 class CommandOutput {
  public:
   CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse = false);
@@ -79,7 +81,7 @@ class CommandOutput {
   void checkWatchdog(const ros::TimerEvent&);
   void checkWatchdogNow();
   void checkWallWatchdog(const ros::SteadyTimerEvent&);
-  void stopForOutage(const char* clock, double since, double now);
+  void stopForOutage(const char* clock, const FrameWatchdog& watchdog, double now);
   void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   std::mutex mutex_;  // frames, ~enable and the watchdog timers may run on different threads
@@ -106,6 +108,7 @@ class CommandOutput {
   long dropped_since_report_ = 0;
   long watchdog_stops_ = 0;
   std::string last_stop_clock_ = "none";
+  double last_stop_timeout_ = 0.0;  // of the watchdog that stopped the robot last
   ros::Time last_stamp_;
   int frames_since_check_ = 0;
 };
