@@ -1,5 +1,6 @@
 // rostest: the beacon chaser through its topics (wall time, no simulator), fed bad input.
 #include <dynamic_reconfigure/Reconfigure.h>
+#include <follow_bot_msgs/BehaviourStatus.h>
 #include <geometry_msgs/Twist.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
@@ -8,6 +9,7 @@
 #include <sensor_msgs/Image.h>
 
 #include <cmath>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,22 +40,34 @@ bool sane(const geometry_msgs::Twist& t) {
          t.angular.y == 0;
 }
 
-// One beacon_chaser instance under its own topic prefix (see beacon_chaser_node.test).
+// One beacon_chaser instance under its own topic prefix (see beacon_chaser_node.test), with the
+// commands it sent (its own: another node's watchdog stop must not count as this one's answer)
+// and its ~status answers: frame stamp -> whether a command went out for it.
 struct Chaser {
-  Chaser(ros::NodeHandle& nh, const std::string& prefix, std::vector<geometry_msgs::Twist>* sink)
+  Chaser(ros::NodeHandle& nh, const std::string& prefix, const std::string& node)
       : images(nh.advertise<sensor_msgs::Image>(prefix + "/image", 10)),
         camera_info(nh.advertise<sensor_msgs::CameraInfo>(prefix + "/camera_info", 1)),
         commands(nh.subscribe<geometry_msgs::Twist>(
             prefix + "/cmd_vel", 100,
             boost::function<void(const geometry_msgs::TwistConstPtr&)>(
-                [sink](const geometry_msgs::TwistConstPtr& msg) { sink->push_back(*msg); }))) {}
+                [this](const geometry_msgs::TwistConstPtr& msg) { received.push_back(*msg); }))),
+        statuses(nh.subscribe<follow_bot_msgs::BehaviourStatus>(
+            node + "/status", 100,
+            boost::function<void(const follow_bot_msgs::BehaviourStatusConstPtr&)>(
+                [this](const follow_bot_msgs::BehaviourStatusConstPtr& msg) {
+                  answers[msg->header.stamp] = msg->command_sent;
+                }))) {}
   bool connected() const {
-    return images.getNumSubscribers() > 0 && commands.getNumPublishers() > 0;
+    return images.getNumSubscribers() > 0 && commands.getNumPublishers() > 0 &&
+           statuses.getNumPublishers() > 0;
   }
 
   ros::Publisher images;
   ros::Publisher camera_info;
+  std::vector<geometry_msgs::Twist> received;
   ros::Subscriber commands;
+  std::map<ros::Time, bool> answers;
+  ros::Subscriber statuses;
 };
 
 class BeaconChaserNode : public ::testing::Test {
@@ -61,48 +75,57 @@ class BeaconChaserNode : public ::testing::Test {
   void SetUp() override {
     log_ = nh_.subscribe("/rosout", 100, &BeaconChaserNode::onLog, this);
     const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(20.0);
-    while (!(follow_.connected() && approach_.connected()) && ros::WallTime::now() < deadline) {
+    while (!(follow_.connected() && approach_.connected() && watchdog_.connected()) &&
+           ros::WallTime::now() < deadline) {
       ros::WallDuration(0.01).sleep();
     }
     ASSERT_TRUE(follow_.connected()) << "beacon_follow never connected";
     ASSERT_TRUE(approach_.connected()) << "beacon_approach never connected";
+    ASSERT_TRUE(watchdog_.connected()) << "beacon_watchdog never connected";
   }
 
   void onLog(const rosgraph_msgs::LogConstPtr& msg) { logs_.push_back(*msg); }
 
-  // Spins for `wait` wall seconds and returns the commands received so far.
-  std::vector<geometry_msgs::Twist> spinFor(double wait) {
-    return spinUntil([] { return false; }, wait);
+  // Spins for `wait` wall seconds.
+  void spinFor(double wait) {
+    spinUntil([] { return false; }, wait);
   }
 
-  // Spins until `done()` or for `timeout` seconds of wall time; returns the answers so far.
+  // Spins until `done()` or for `timeout` seconds of wall time.
   template <typename Done>
-  std::vector<geometry_msgs::Twist> spinUntil(Done done, double timeout) {
+  void spinUntil(Done done, double timeout) {
     const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(timeout);
     while (!done() && ros::WallTime::now() < deadline) {
       ros::spinOnce();
       ros::WallDuration(0.001).sleep();
     }
-    return received_;
   }
 
-  // Publishes a frame to `chaser` and collects its answers within `wait` seconds.
+  // Publishes a frame to `chaser` and returns its commands within `wait` seconds.
   std::vector<geometry_msgs::Twist> send(Chaser& chaser, const sensor_msgs::Image& msg,
                                          double wait = 0.1) {
-    received_.clear();
+    chaser.received.clear();
     chaser.images.publish(msg);
-    return spinFor(wait);
+    spinFor(wait);
+    return chaser.received;
   }
 
-  // Publishes a frame that must be answered and spins until its answer arrives (up to 10 s: a
-  // loaded machine may be slow), then `grace` seconds more to catch any second command. Frames
-  // then follow each other well inside the 0.15 s watchdog, which a fixed wait may not.
+  // Publishes a frame and spins until the node's ~status answers it and, when that answer says
+  // a command went out, until the command arrives (up to 10 s: a loaded machine may be slow);
+  // then `grace` seconds more to catch any second command. Frames then follow each other well
+  // inside the 0.15 s watchdog, which a fixed wait may not.
   std::vector<geometry_msgs::Twist> sendAnswered(Chaser& chaser, const sensor_msgs::Image& msg,
                                                  double grace = 0.03) {
-    received_.clear();
+    chaser.received.clear();
     chaser.images.publish(msg);
-    spinUntil([this] { return !received_.empty(); }, 10.0);
-    return spinFor(grace);
+    spinUntil(
+        [&] {
+          const auto answer = chaser.answers.find(msg.header.stamp);
+          return answer != chaser.answers.end() && (!answer->second || !chaser.received.empty());
+        },
+        10.0);
+    spinFor(grace);
+    return chaser.received;
   }
 
   sensor_msgs::Image frame(const cv::Mat& bgr) {
@@ -123,9 +146,9 @@ class BeaconChaserNode : public ::testing::Test {
   }
 
   ros::NodeHandle nh_;
-  std::vector<geometry_msgs::Twist> received_;
-  Chaser follow_{nh_, "/follow", &received_};
-  Chaser approach_{nh_, "/approach", &received_};
+  Chaser follow_{nh_, "/follow", "/beacon_follow"};
+  Chaser approach_{nh_, "/approach", "/beacon_approach"};
+  Chaser watchdog_{nh_, "/watchdog", "/beacon_watchdog"};
   ros::Subscriber log_;
   std::vector<rosgraph_msgs::Log> logs_;
   ros::Time stamp_{1000.0};
@@ -175,7 +198,7 @@ TEST_F(BeaconChaserNode, AllRedStopsWithinAThirdOfASecondAndThenGoesQuiet) {
   int zeros = 0;
   int last_reply = -1;
   for (int i = 0; i < 30; ++i) {  // 1 s of frames at 30 Hz
-    const auto replies = send(follow_, frame(red));
+    const auto replies = sendAnswered(follow_, frame(red));
     ASSERT_LE(replies.size(), 1u);
     if (replies.empty()) continue;
     EXPECT_TRUE(sane(replies[0]));
@@ -192,25 +215,26 @@ TEST_F(BeaconChaserNode, AllRedStopsWithinAThirdOfASecondAndThenGoesQuiet) {
 TEST_F(BeaconChaserNode, AllGreenGivesASaneCommand) {
   const cv::Mat green(480, 640, CV_8UC3, kGreen);
   for (int i = 0; i < 10; ++i) {
-    const auto replies = send(follow_, frame(green));
+    const auto replies = sendAnswered(follow_, frame(green));
     ASSERT_LE(replies.size(), 1u);
     for (const auto& reply : replies) EXPECT_TRUE(sane(reply));
   }
 }
 
 TEST_F(BeaconChaserNode, StopsWithinAFifthOfASecondWhenFramesStop) {
-  for (int i = 0; i < 10; ++i) send(follow_, frame(floorWithBall(kGreen)), 0.03);
-  received_.clear();
+  for (int i = 0; i < 10; ++i) sendAnswered(watchdog_, frame(floorWithBall(kGreen)));
+  const std::vector<geometry_msgs::Twist>& received = watchdog_.received;
+  watchdog_.received.clear();
   const ros::WallTime last_frame = ros::WallTime::now();
   ros::WallTime first_stop;
   const ros::WallTime deadline = last_frame + ros::WallDuration(1.0);
   while (ros::WallTime::now() < deadline) {
     ros::spinOnce();
-    if (first_stop.isZero() && !received_.empty()) first_stop = ros::WallTime::now();
+    if (first_stop.isZero() && !received.empty()) first_stop = ros::WallTime::now();
     ros::WallDuration(0.002).sleep();
   }
-  ASSERT_EQ(received_.size(), 1u) << "expected exactly one stop command";
-  EXPECT_TRUE(isZero(received_[0]));
+  ASSERT_EQ(received.size(), 1u) << "expected exactly one stop command";
+  EXPECT_TRUE(isZero(received[0]));
   EXPECT_LE((first_stop - last_frame).toSec(), 0.2);
 }
 
@@ -253,6 +277,43 @@ TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
     max_linear = std::max(max_linear, replies[0].linear.x);
   }
   EXPECT_GT(max_linear, 0.05) << "with intrinsics the ball is ranged and approached";
+}
+
+// camera_info for 640x480 while the frames come at half that size (a binning camera, a resized
+// stream): the intrinsics are scaled to the frame and the ball is ranged and approached. Frames of
+// another shape are dropped with an error naming both sizes, and nothing is sent for them.
+TEST_F(BeaconChaserNode, ApproachFitsCameraInfoToTheFrameSize) {
+  sensor_msgs::CameraInfo full;
+  full.width = 640;
+  full.height = 480;
+  const double f = 320.0 / std::tan(M_PI / 6.0);
+  full.K = {f, 0.0, 320.0, 0.0, f, 240.0, 0.0, 0.0, 1.0};
+  const cv::Mat ball = floorWithBall(kGreen, {330, 250});
+  cv::Mat half;
+  cv::resize(ball, half, cv::Size(320, 240), 0, 0, cv::INTER_AREA);
+  double max_linear = 0.0;
+  for (int i = 0; i < 15; ++i) {
+    approach_.camera_info.publish(full);
+    const auto replies = sendAnswered(approach_, frame(half));
+    ASSERT_EQ(replies.size(), 1u);
+    EXPECT_TRUE(sane(replies[0]));
+    max_linear = std::max(max_linear, replies[0].linear.x);
+  }
+  EXPECT_GT(max_linear, 0.05) << "the half-size frame is ranged through scaled intrinsics";
+
+  cv::Mat wide;
+  cv::resize(ball, wide, cv::Size(1280, 720));
+  for (int i = 0; i < 5; ++i) {
+    approach_.camera_info.publish(full);
+    for (const auto& reply : send(approach_, frame(wide))) {
+      EXPECT_TRUE(isZero(reply)) << "frame " << i << ": only the watchdog's stop may answer";
+    }
+  }
+  spinFor(0.5);  // rosout is asynchronous
+  EXPECT_GE(logsFrom("/beacon_approach",
+                     "dropping frame: the frame is 1280x720 but /approach/camera_info is for "
+                     "640x480"),
+            1);
 }
 
 // Sends one dynamic_reconfigure update (string and double parameters) to `node` and returns
@@ -303,7 +364,7 @@ TEST_F(BeaconChaserNode, ReconfigureAppliesClampsOrRefusesWhole) {
   EXPECT_EQ(strIn(config, "follow_colour"), "blue");
   EXPECT_EQ(strIn(config, "stop_colour"), "green");
   for (int i = 0; i < 5; ++i) {  // stopped by the stop colour: idle, at most its one zero
-    const auto replies = send(follow_, frame(green_ball));
+    const auto replies = sendAnswered(follow_, frame(green_ball));
     ASSERT_LE(replies.size(), 1u);
     for (const auto& reply : replies) EXPECT_TRUE(isZero(reply)) << "green is the stop colour now";
   }
@@ -329,7 +390,7 @@ TEST_F(BeaconChaserNode, ReconfigureAppliesClampsOrRefusesWhole) {
   EXPECT_EQ(strIn(config, "follow_colour"), "green");
   geometry_msgs::Twist last;
   for (int i = 0; i < 15; ++i) {
-    const auto replies = send(follow_, frame(green_ball));
+    const auto replies = sendAnswered(follow_, frame(green_ball));
     ASSERT_EQ(replies.size(), 1u);
     last = replies[0];
   }

@@ -217,5 +217,39 @@ TEST(RectifyPixels, ValidateRejectsABrokenLens) {
   EXPECT_NE(validate(camera).find("lens R"), std::string::npos);
 }
 
+// A frame half the calibrated size (binning 2, a resized stream) sees each floor point at half
+// the pixel, through the lens too; another aspect ratio has no intrinsics.
+TEST(IntrinsicsForFrame, ScalesWithTheFrameAndRejectsAnotherAspect) {
+  const CameraGeometry camera = barrelCamera();
+  const cv::Size calibrated(640, 480);
+  const std::optional<CameraGeometry> same = intrinsicsForFrame(camera, calibrated, calibrated);
+  ASSERT_TRUE(same);
+  EXPECT_EQ(same->fx, camera.fx);
+  EXPECT_EQ(same->lens->camera_matrix, camera.lens->camera_matrix);
+  EXPECT_TRUE(intrinsicsForFrame(camera, cv::Size(), cv::Size(320, 240)));
+
+  const std::optional<CameraGeometry> half = intrinsicsForFrame(camera, calibrated, {320, 240});
+  ASSERT_TRUE(half);
+  EXPECT_EQ(validate(*half), "");
+  EXPECT_DOUBLE_EQ(half->fx, camera.fx / 2);
+  EXPECT_DOUBLE_EQ(half->cy, camera.cy / 2);
+  EXPECT_DOUBLE_EQ(half->lens->camera_matrix(1, 2), camera.lens->camera_matrix(1, 2) / 2);
+  EXPECT_EQ(half->lens->camera_matrix(2, 2), 1.0);
+  EXPECT_EQ(half->height_m, camera.height_m);
+  const cv::Point2d raw(100.0, 400.0);
+  const cv::Point2d rectified = rectifyPixel(camera, raw);
+  const cv::Point2d rectified_half = rectifyPixel(*half, raw / 2);
+  EXPECT_NEAR(rectified_half.x, rectified.x / 2, 1e-9);
+  EXPECT_NEAR(rectified_half.y, rectified.y / 2, 1e-9);
+  const std::optional<cv::Point2d> floor = pixelToGround(camera, 320.0, 400.0);
+  const std::optional<cv::Point2d> floor_half = pixelToGround(*half, 160.0, 200.0);
+  ASSERT_TRUE(floor && floor_half);
+  EXPECT_NEAR(floor_half->x, floor->x, 1e-12);
+
+  EXPECT_TRUE(intrinsicsForFrame(camera, calibrated, {1280, 960}));
+  EXPECT_FALSE(intrinsicsForFrame(camera, calibrated, {1280, 720}));
+  EXPECT_FALSE(intrinsicsForFrame(camera, calibrated, {320, 241}));
+}
+
 }  // namespace
 }  // namespace follow_bot

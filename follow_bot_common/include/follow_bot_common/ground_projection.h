@@ -41,6 +41,14 @@ struct CameraGeometry {
 // Empty when the geometry is usable, otherwise a message naming the first bad field.
 std::string validate(const CameraGeometry& camera);
 
+// `camera` with the intrinsics it has for images of `calibrated` size (CameraInfo width, height)
+// made those of frames of `frame` size: the rectified camera's fx, fy, cx, cy and the lens's K
+// scaled by frame / calibrated, as image_geometry does for binning (REP 104), for a binning
+// camera or a resized stream. Unchanged when the sizes are equal or `calibrated` is unknown
+// (empty). Empty when `frame` is not `calibrated` resized by one factor (another aspect ratio).
+std::optional<CameraGeometry> intrinsicsForFrame(const CameraGeometry& camera,
+                                                 const cv::Size& calibrated, const cv::Size& frame);
+
 // Raw image pixels (column, row) moved to where the rectified camera (fx, fy, cx, cy) sees the
 // same rays: cv::undistortPoints with K, D, R and P, as image_geometry's rectifyPoint, but in
 // double precision and iterated to convergence (strong barrel lenses need more than OpenCV's

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <sstream>
 
 #include <opencv2/calib3d.hpp>
@@ -65,6 +66,30 @@ std::string validate(const CameraGeometry& camera) {
     return message.str();
   }
   return camera.lens ? validateLens(*camera.lens) : "";
+}
+
+std::optional<CameraGeometry> intrinsicsForFrame(const CameraGeometry& camera,
+                                                 const cv::Size& calibrated,
+                                                 const cv::Size& frame) {
+  if (calibrated.empty() || frame == calibrated) return camera;
+  // Integer sizes: one factor for both axes exactly, or the pixels are not square to each other.
+  if (static_cast<int64_t>(frame.width) * calibrated.height !=
+      static_cast<int64_t>(frame.height) * calibrated.width) {
+    return std::nullopt;
+  }
+  const double scale = static_cast<double>(frame.width) / calibrated.width;
+  CameraGeometry scaled = camera;
+  scaled.fx *= scale;
+  scaled.fy *= scale;
+  scaled.cx *= scale;
+  scaled.cy *= scale;
+  if (scaled.lens) {
+    cv::Matx33d& k = scaled.lens->camera_matrix;
+    for (int row = 0; row < 2; ++row) {
+      for (int col = 0; col < 3; ++col) k(row, col) *= scale;
+    }
+  }
+  return scaled;
 }
 
 namespace {

@@ -5,6 +5,8 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <sstream>
 #include <string>
 
 #include <cv_bridge/cv_bridge.h>
@@ -66,6 +68,9 @@ struct BehaviourOptions {
 //    distortion the cores undo on the pixels they use), unusable ones are ignored with
 //    a throttled error. A separate subscription, not a CameraSubscriber: a behaviour keeps
 //    running on frames when camera_info is late or missing (then it says what it cannot do).
+//    The intrinsics are those of the frame's size: camera_info's scaled when the frame is its
+//    image resized by one factor (binning, a resized stream, a new camera_info not there yet);
+//    a frame of another shape is dropped with a throttled error naming both sizes.
 //  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
 //  stamp checks;
 //    a bad frame is dropped with a throttled error), the camera's mounting for the frame (until
@@ -195,15 +200,55 @@ class BehaviourNodelet : public CheckedNodelet {
   }
 
   void onCameraInfo(const sensor_msgs::CameraInfo& info) {
-    bool changed = false;
-    const std::string error = updateIntrinsics(info, image_rectified_, camera_, changed);
+    CameraGeometry calibrated = camera_;
+    const std::string error = updateIntrinsics(info, image_rectified_, calibrated);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
       return;
     }
-    changed = changed || !has_intrinsics_;
+    calibrated_ = calibrated;
+    calibrated_size_ = cv::Size(static_cast<int>(info.width), static_cast<int>(info.height));
+    const bool first = !has_intrinsics_;
     has_intrinsics_ = true;
-    intrinsicsArrived(changed);
+    // For the frames arriving now, unless camera_info describes another size (a change of
+    // resolution): then for its own.
+    bool changed = false;
+    if (frame_size_.empty() || !fitIntrinsics(frame_size_, changed)) {
+      fitIntrinsics(calibrated_size_, changed);
+    }
+    intrinsicsArrived(changed || first);
+  }
+
+  // camera_'s intrinsics, from the last usable camera_info, made those of frames of `size`
+  // (intrinsicsForFrame); false, camera_ unchanged, when such frames are not its image resized.
+  bool fitIntrinsics(const cv::Size& size, bool& changed) {
+    const std::optional<CameraGeometry> fitted =
+        intrinsicsForFrame(calibrated_, calibrated_size_, size);
+    if (!fitted) return false;
+    changed = !sameIntrinsics(*fitted, camera_);
+    camera_.fx = fitted->fx;
+    camera_.fy = fitted->fy;
+    camera_.cx = fitted->cx;
+    camera_.cy = fitted->cy;
+    camera_.lens = fitted->lens;
+    intrinsics_size_ = size;
+    return true;
+  }
+
+  // "" when camera_ holds intrinsics for frames of `size` (or none arrived yet), else why the
+  // frame cannot be used.
+  std::string intrinsicsFor(const cv::Size& size) {
+    if (!has_intrinsics_ || size == intrinsics_size_) return "";
+    bool changed = false;
+    if (!fitIntrinsics(size, changed)) {
+      std::ostringstream why;
+      why << "the frame is " << size.width << "x" << size.height << " but " << camera_info_topic_
+          << " is for " << calibrated_size_.width << "x" << calibrated_size_.height
+          << ", not an image of that shape";
+      return why.str();
+    }
+    if (changed) intrinsicsArrived(true);
+    return "";
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
@@ -214,13 +259,15 @@ class BehaviourNodelet : public CheckedNodelet {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
     std::string error;
     const cv_bridge::CvImageConstPtr image = bgrView(msg, error);
-    if (!image) {
+    if (image) error = intrinsicsFor(image->image.size());
+    if (!image || !error.empty()) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
       output_->frameDropped(error);
       return;
     }
     // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
     output_->frameArrived();
+    frame_size_ = image->image.size();
     const Frame frame{msg->header, image->image, CommandOutput::frameTime(msg->header).toSec()};
     updateDiagnostics();
     const Decision decision = updateMounting(msg->header.frame_id)
@@ -260,6 +307,10 @@ class BehaviourNodelet : public CheckedNodelet {
   std::unique_ptr<CameraMountingSource> mounting_;
   bool image_rectified_ = false;  // frames are rectified already: camera_info's D is not applied
   bool has_intrinsics_ = false;
+  CameraGeometry calibrated_;  // intrinsics as the last usable camera_info gave them
+  cv::Size calibrated_size_;   // its width and height (empty: not given)
+  cv::Size intrinsics_size_;   // the frame size camera_'s intrinsics are for
+  cv::Size frame_size_;        // the last accepted frame's
   std::string camera_info_topic_;
   std::string image_topic_;
   // Declared first among the ROS handles: destroyed last, it sends the final stop.

@@ -82,14 +82,20 @@ inline bool sameLens(const std::optional<CameraLens>& a, const std::optional<Cam
          a->rectification == b->rectification;
 }
 
+// Whether `a` and `b` have the same intrinsics (the rectified camera and the lens).
+inline bool sameIntrinsics(const CameraGeometry& a, const CameraGeometry& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && sameLens(a.lens, b.lens);
+}
+
 // The intrinsics side of `camera` from a CameraInfo, through image_geometry's PinholeCameraModel:
 // the rectified camera from P (K when P is all zero, an uncalibrated P) and, for raw frames
 // (`image_rectified` false) through a lens with distortion, the lens (K, D, R) the cores rectify
-// their pixels with. Frames already rectified (image_proc's image_rect) use P alone. Returns ""
-// on success, otherwise why the message was ignored (`camera` then unchanged). `changed` tells
-// whether the intrinsics differ from before.
+// their pixels with. Frames already rectified (image_proc's image_rect) use P alone. They are the
+// intrinsics of images of the CameraInfo's width and height (intrinsicsForFrame fits them to
+// other frame sizes). Returns "" on success, otherwise why the message was ignored (`camera` then
+// unchanged).
 inline std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, bool image_rectified,
-                                    CameraGeometry& camera, bool& changed) {
+                                    CameraGeometry& camera) {
   image_geometry::PinholeCameraModel model;
   model.fromCameraInfo(info);
   const cv::Matx33d k = model.fullIntrinsicMatrix();
@@ -116,8 +122,6 @@ inline std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, bool im
   }
   const std::string error = validate(updated);
   if (!error.empty()) return error;
-  changed = updated.fx != camera.fx || updated.fy != camera.fy || updated.cx != camera.cx ||
-            updated.cy != camera.cy || !sameLens(updated.lens, camera.lens);
   camera = updated;
   return "";
 }
