@@ -94,6 +94,18 @@ def test_malformed_scenarios_name_the_field(data, words):
     assert words in str(error.value)
 
 
+def test_stop_when_still_waits_as_long_as_the_still_since_bounds_demand():
+    """The early end keeps the full run's judgement: still for duration - bound at the end."""
+    assert parse_scenario(with_(stop_when="still")).still_stop_s == 3.0
+    bounded = with_(
+        stop_when="still", duration=45.0,
+        criteria={"target.still_since": {"max": 30.0}, "parking.still_since": {"max": 40.0}},
+    )  # fmt: skip
+    assert parse_scenario(bounded).still_stop_s == 15.0
+    late = with_(stop_when="still", duration=25.0, criteria={"target.still_since": {"max": 24.0}})
+    assert parse_scenario(late).still_stop_s == 3.0  # never shorter than a behaviour's hold
+
+
 def test_criteria_bounds_and_missing_values():
     values = {"a": {"b": 0.5}, "flag": True, "none": None}
     assert Criterion("a.b", maximum=1.0).check(values) == (0.5, True)

@@ -51,6 +51,9 @@ from harness.world import (
 )
 
 STOP_CONDITIONS = ("duration", "lap_complete", "still")
+# `stop_when: still` waits at least this long without motion: longer than a behaviour's hold
+# while its target is briefly lost (the parker holds 2 s, then searches), so a pause is not an end.
+STILL_STOP_S = 3.0
 
 
 class ScenarioError(ValidationError):
@@ -169,6 +172,18 @@ class Scenario:
     source: Path | None = None
     spec: dict = field(default_factory=dict, compare=False)  # the run's own fields, as parsed
     parameters: dict = field(default_factory=dict, compare=False)  # a sweep member's draws
+
+    @property
+    def still_stop_s(self) -> float:
+        """How long every command must have been zero before `stop_when: still` ends the run:
+        as long as the criteria's still_since bounds demand at the end of the full `duration`
+        (a bound of 22 s in a 25 s run: the last 3 s), so the early end judges the stop as the
+        whole run would, and never less than STILL_STOP_S."""
+        bounds = [
+            c.maximum for c in self.criteria
+            if c.metric.split(".")[-1] == "still_since" and c.maximum is not None
+        ]  # fmt: skip
+        return max([STILL_STOP_S, *(self.duration - bound for bound in bounds)])
 
 
 def _world_file(value: Any, where: str, base: Path) -> Path:

@@ -52,9 +52,6 @@ from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
 from harness.world import WorldError, load_world, resolve_world_path
 
-# `stop_when: still` ends a run after this long without motion: longer than a behaviour's hold
-# while its target is briefly lost (the parker holds 2 s, then searches), so a pause is not an end.
-STILL_STOP_S = 3.0
 # The robot description's root (harness/robot_description.py): a base driver's odom child frame.
 BASE_FRAME = "base_footprint"
 
@@ -138,6 +135,7 @@ class SimNode:
             start, perturbations = scenario.start, scenario.perturbations
             self.stop_at_lap = scenario.stop_when == "lap_complete"
             self.stop_when_still = scenario.stop_when == "still"
+            self.still_stop_s = scenario.still_stop_s
         else:
             world = load_world(resolve_world_path(rospy.get_param("~world", "course")))
             transport = world.camera_transport
@@ -245,7 +243,7 @@ class SimNode:
     def _finished(self) -> bool:
         if self.duration and self.sim.time >= self.duration - 1e-9:
             return True
-        if self.stop_when_still and self._still_for(STILL_STOP_S):
+        if self.stop_when_still and self._still_for(self.still_stop_s):
             return True
         if self.laps is not None and self.sim.step_index % 15 == 0 and self.sim.record.pose:
             recent = np.asarray(self.sim.record.pose[-15:])[:, :2]
