@@ -321,9 +321,14 @@ class Storm:
         r = self.rng
         encoding = r.choice(VALID_ENCODINGS)
         bpp = BYTES_PER_PIXEL[encoding]
-        if r.random() < 0.2:
+        if r.random() < 0.75:
+            # The camera_info's image resized (tiny ones too): the nodes scale its intrinsics and
+            # process the frame.
+            scale = r.randrange(1, 50)
+            width, height = WIDTH // 160 * scale, HEIGHT // 160 * scale
+        elif r.random() < 0.2:
             width, height = r.randrange(1, 12), r.randrange(1, 12)  # tiny frames
-        else:
+        else:  # mostly of another shape than camera_info's: dropped, named in an error
             width, height = r.randrange(1, 200), r.randrange(1, 160)
         step = width * bpp + r.choice([0, 0, 0, 2, 4])  # padded rows are valid (even: mono16)
         return image_msg(width, height, encoding, step, r.randbytes(height * step), self.stamp())

@@ -6,7 +6,6 @@
 #include <memory>
 #include <mutex>
 #include <optional>
-#include <sstream>
 #include <string>
 
 #include <cv_bridge/cv_bridge.h>
@@ -201,54 +200,70 @@ class BehaviourNodelet : public CheckedNodelet {
 
   void onCameraInfo(const sensor_msgs::CameraInfo& info) {
     CameraGeometry calibrated = camera_;
-    const std::string error = updateIntrinsics(info, image_rectified_, calibrated);
+    std::string error = calibratedSizeError(info);
+    if (error.empty()) error = updateIntrinsics(info, image_rectified_, calibrated);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
       return;
     }
     calibrated_ = calibrated;
     calibrated_size_ = cv::Size(static_cast<int>(info.width), static_cast<int>(info.height));
-    const bool first = !has_intrinsics_;
-    has_intrinsics_ = true;
-    // For the frames arriving now, unless camera_info describes another size (a change of
-    // resolution): then for its own.
-    bool changed = false;
-    if (frame_size_.empty() || !fitIntrinsics(frame_size_, changed)) {
-      fitIntrinsics(calibrated_size_, changed);
-    }
-    intrinsicsArrived(changed || first);
+    calibration_pending_ = true;
+    // Taken now when it describes the frames arriving (or none arrived yet); else the next
+    // frame decides (a change of resolution).
+    fitIntrinsics(frame_size_.empty() ? calibrated_size_ : frame_size_);
   }
 
-  // camera_'s intrinsics, from the last usable camera_info, made those of frames of `size`
-  // (intrinsicsForFrame); false, camera_ unchanged, when such frames are not its image resized.
-  bool fitIntrinsics(const cv::Size& size, bool& changed) {
+  // Both zero (not given) or both a frame's: a size no frame can have is a broken camera_info.
+  static std::string calibratedSizeError(const sensor_msgs::CameraInfo& info) {
+    const bool unset = info.width == 0 && info.height == 0;
+    const bool frame_size = info.width > 0 && info.width <= kMaxDimension && info.height > 0 &&
+                            info.height <= kMaxDimension;
+    if (unset || frame_size) return "";
+    return "its size " + std::to_string(info.width) + "x" + std::to_string(info.height) +
+           " is no frame's (1-" + std::to_string(kMaxDimension) + " each, or both 0)";
+  }
+
+  // camera_'s intrinsics from the last usable camera_info, made those of frames of `size`
+  // (intrinsicsForFrame), and intrinsicsArrived(); false, camera_ unchanged, when such frames
+  // are not its image resized.
+  bool fitIntrinsics(const cv::Size& size) {
     const std::optional<CameraGeometry> fitted =
         intrinsicsForFrame(calibrated_, calibrated_size_, size);
     if (!fitted) return false;
-    changed = !sameIntrinsics(*fitted, camera_);
+    const bool changed = !has_intrinsics_ || !sameIntrinsics(*fitted, camera_);
     camera_.fx = fitted->fx;
     camera_.fy = fitted->fy;
     camera_.cx = fitted->cx;
     camera_.cy = fitted->cy;
     camera_.lens = fitted->lens;
-    intrinsics_size_ = size;
+    has_intrinsics_ = true;
+    intrinsics_size_ = calibrated_size_.empty() ? cv::Size() : size;  // empty: any size
+    calibration_pending_ = false;
+    intrinsicsArrived(changed);
     return true;
   }
 
-  // "" when camera_ holds intrinsics for frames of `size` (or none arrived yet), else why the
-  // frame cannot be used.
+  // "" when camera_ holds intrinsics for frames of `size` (or no camera_info arrived yet), else
+  // why the frame cannot be used. A camera_info that does not describe the frames while the
+  // intrinsics in force do is taken for broken: they stay (a throttled warning).
   std::string intrinsicsFor(const cv::Size& size) {
-    if (!has_intrinsics_ || size == intrinsics_size_) return "";
-    bool changed = false;
-    if (!fitIntrinsics(size, changed)) {
-      std::ostringstream why;
-      why << "the frame is " << size.width << "x" << size.height << " but " << camera_info_topic_
-          << " is for " << calibrated_size_.width << "x" << calibrated_size_.height
-          << ", not an image of that shape";
-      return why.str();
+    const bool in_force = has_intrinsics_ && (intrinsics_size_.empty() || size == intrinsics_size_);
+    // Fitted already, or no camera_info yet.
+    if (!calibration_pending_ && (in_force || !has_intrinsics_)) return "";
+    if (fitIntrinsics(size)) return "";
+    const std::string described = camera_info_topic_ + " is for " +
+                                  std::to_string(calibrated_size_.width) + "x" +
+                                  std::to_string(calibrated_size_.height);
+    if (in_force) {
+      NODELET_WARN_THROTTLE(5.0,
+                            "%s, not frames of %dx%d: keeping the intrinsics of the last one "
+                            "that was",
+                            described.c_str(), size.width, size.height);
+      return "";
     }
-    if (changed) intrinsicsArrived(true);
-    return "";
+    return "the frame is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+           " but " + described + ", not an image of that shape";
   }
 
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
@@ -306,11 +321,12 @@ class BehaviourNodelet : public CheckedNodelet {
   CameraGeometry camera_;
   std::unique_ptr<CameraMountingSource> mounting_;
   bool image_rectified_ = false;  // frames are rectified already: camera_info's D is not applied
-  bool has_intrinsics_ = false;
-  CameraGeometry calibrated_;  // intrinsics as the last usable camera_info gave them
-  cv::Size calibrated_size_;   // its width and height (empty: not given)
-  cv::Size intrinsics_size_;   // the frame size camera_'s intrinsics are for
-  cv::Size frame_size_;        // the last accepted frame's
+  bool has_intrinsics_ = false;   // camera_ holds intrinsics from a camera_info
+  cv::Size intrinsics_size_;      // the frame size they are for (empty: any)
+  CameraGeometry calibrated_;     // intrinsics as the last usable camera_info gave them
+  cv::Size calibrated_size_;      // its width and height (empty: not given)
+  bool calibration_pending_ = false;  // calibrated_ is not in camera_ yet
+  cv::Size frame_size_;               // the last accepted frame's
   std::string camera_info_topic_;
   std::string image_topic_;
   // Declared first among the ROS handles: destroyed last, it sends the final stop.
