@@ -54,6 +54,14 @@ from harness.world import WorldError, load_world, resolve_world_path
 
 # The robot description's root (harness/robot_description.py): a base driver's odom child frame.
 BASE_FRAME = "base_footprint"
+# ROS time at sim time 0. robot_state_publisher sends the description's fixed joints from a
+# one-shot timer (its publish period, 0.02 s at the default 50 Hz), which under /clock fires only
+# once the clock has moved: the sim moves it this far before frame 0 and waits for the camera's
+# mounting on tf, so every run's behaviour knows its mounting from its first frame on.
+CLOCK_PREROLL_S = 0.1
+# How long to wait for that mounting; a description whose frames the sim cannot see (another
+# tf tree) only costs this once.
+MOUNTING_WAIT_S = 5.0
 
 
 def camera_info_msg(info: dict) -> CameraInfo:
@@ -182,7 +190,7 @@ class SimNode:
     # -- helpers ----------------------------------------------------------------------------
 
     def _stamp(self) -> rospy.Time:
-        return rospy.Time.from_sec(self.sim.time)
+        return rospy.Time.from_sec(CLOCK_PREROLL_S + self.sim.time)
 
     def _publish_clock(self) -> None:
         self.clock_pub.publish(Clock(clock=self._stamp()))
@@ -229,16 +237,38 @@ class SimNode:
         )
 
     def _wait_for_behaviour(self) -> None:
-        """Lockstep needs a listener on the image and a publisher of the status before frame 0."""
+        """Lockstep needs a listener on the image and a publisher of the status before frame 0,
+        and the camera's mounting on tf (CLOCK_PREROLL_S)."""
         deadline = time.monotonic() + self.wait_for_behaviour
         self._subscribe_status(self.wait_for_behaviour)
         while not rospy.is_shutdown() and time.monotonic() < deadline:
             status_up = self.status_sub is not None and self.status_sub.get_num_connections()
             if self.image_pub.get_num_connections() and status_up:
-                time.sleep(0.2)  # let the other connections (camera_info, clock) settle too
+                self._publish_clock()  # the pre-roll (robot_state_publisher's timer fires)
+                self._wait_for_mounting()
+                time.sleep(0.2)  # let the other connections (camera_info, clock, tf) settle too
                 return
             time.sleep(0.02)
         rospy.logwarn("sim: no behaviour connected to the camera and its status; running anyway")
+
+    def _wait_for_mounting(self) -> None:
+        """Until the camera's frame is on tf, when a robot description is published: its latched
+        /tf_static reaches the behaviour as it reaches this node."""
+        if not rospy.has_param("robot_description"):
+            return
+        buffer = tf2_ros.Buffer()
+        listener = tf2_ros.TransformListener(buffer)
+        camera_frame = self.camera_info.header.frame_id
+        deadline = time.monotonic() + MOUNTING_WAIT_S
+        try:
+            while not rospy.is_shutdown() and time.monotonic() < deadline:
+                if buffer.can_transform(BASE_FRAME, camera_frame, rospy.Time()):
+                    return
+                self._publish_clock()  # again, for /clock connections still being made
+                time.sleep(0.02)
+            rospy.logwarn(f"sim: {BASE_FRAME} <- {camera_frame} not on tf; running anyway")
+        finally:
+            listener.unregister()
 
     def _finished(self) -> bool:
         if self.duration and self.sim.time >= self.duration - 1e-9:
@@ -269,7 +299,7 @@ class SimNode:
             fourcc = cv2.VideoWriter_fourcc(*"mp4v")
             width = cam.width * (2 if self.debug_view else 1)
             video = cv2.VideoWriter(self.video_path, fourcc, self.rate_hz, (width, cam.height))
-        self._publish_clock()
+        self.clock_pub.publish(Clock())  # ROS time 0 until the pre-roll
         if self.lockstep:
             self._wait_for_behaviour()
         self.inbox.take()  # forget anything sent before the run started
