@@ -318,6 +318,15 @@ def test_path_law_without_a_camera_is_pd_and_exposes_its_memory():
     assert law.path_points()[0, 1] == pytest.approx(0.0, abs=1e-12)  # straight ahead
 
 
+def test_floor_centre_of_row_spans():
+    camera = core.CameraGeometry()
+    band = core.BandMeasurement(spans=[core.RowSpan(row=float(row), left=310.0, right=330.0)
+                                       for row in range(360, 380)])  # fmt: skip
+    x, y = core.floor_centre(band, camera)
+    assert 0.3 < x < 0.6 and y == pytest.approx(0.0, abs=1e-12)  # straight ahead, in the band
+    assert core.floor_centre(core.BandMeasurement(), camera) is None
+
+
 def seen_at_error(e):
     """A found band at normalised error e (line_controller_test.cpp's seenAtError)."""
     centroid_x = 320.0 * (1.0 + e)
