@@ -310,12 +310,21 @@ def test_path_law_without_a_camera_is_pd_and_exposes_its_memory():
     assert isinstance(law, core.PathLaw) and law.path_points().shape == (0, 2)
     band = core.BandMeasurement(found=True, pixel_count=200, centroid_x=320.0, centroid_y=370.0,
                                 centre_pixel_count=200, centre_found=True, centre_x=320.0,
-                                centre_y=370.0, confidence=1.0, row_begin=360,
-                                row_end=380)  # fmt: skip
+                                centre_y=370.0, confidence=1.0, row_begin=360, row_end=380,
+                                spans=[core.RowSpan(row=370, left=315.0, right=325.0)])  # fmt: skip
     law.step(core.LineObservation(measurement=core.LineMeasurement(
         image_width=640, image_height=480, band=band), stamp=0.0))  # fmt: skip
     assert law.path_points().shape == (1, 2) and law.path_state.points == 1
     assert law.path_points()[0, 1] == pytest.approx(0.0, abs=1e-12)  # straight ahead
+
+
+def test_floor_centre_of_row_spans():
+    camera = core.CameraGeometry()
+    band = core.BandMeasurement(spans=[core.RowSpan(row=float(row), left=310.0, right=330.0)
+                                       for row in range(360, 380)])  # fmt: skip
+    x, y = core.floor_centre(band, camera)
+    assert 0.3 < x < 0.6 and y == pytest.approx(0.0, abs=1e-12)  # straight ahead, in the band
+    assert core.floor_centre(core.BandMeasurement(), camera) is None
 
 
 def seen_at_error(e):

@@ -130,6 +130,13 @@ void bindLineDetector(py::module_& m) {
       .def_readwrite("max_width_fraction", &LineDetectorConfig::max_width_fraction);
   defKeywordInit(config, static_cast<Validator<LineDetectorConfig>>(&validate));
 
+  using RowSpan = BandMeasurement::RowSpan;
+  py::class_<RowSpan> span(m, "RowSpan", "One band row's whole runs: their outer edges (columns).");
+  span.def_readwrite("row", &RowSpan::row)
+      .def_readwrite("left", &RowSpan::left)
+      .def_readwrite("right", &RowSpan::right);
+  defKeywordInit(span);
+
   py::class_<BandMeasurement> measurement(m, "BandMeasurement");
   measurement.def_readwrite("found", &BandMeasurement::found)
       .def_readwrite("pixel_count", &BandMeasurement::pixel_count)
@@ -142,11 +149,23 @@ void bindLineDetector(py::module_& m) {
       .def_readwrite("centre_found", &BandMeasurement::centre_found)
       .def_readwrite("centre_x", &BandMeasurement::centre_x)
       .def_readwrite("centre_y", &BandMeasurement::centre_y)
+      .def_readwrite("spans", &BandMeasurement::spans)
       .def_readwrite("row_begin", &BandMeasurement::row_begin)
       .def_readwrite("row_end", &BandMeasurement::row_end)
       .def_readwrite("distance_m", &BandMeasurement::distance_m)
       .def_readwrite("clamped", &BandMeasurement::clamped);
   defKeywordInit(measurement);
+
+  m.def(
+      "floor_centre",
+      [](const BandMeasurement& band, const CameraGeometry& camera) -> std::optional<py::tuple> {
+        const std::optional<cv::Point2d> centre = floorCentre(band, camera);
+        if (!centre) return std::nullopt;
+        return pointTuple(*centre);
+      },
+      "band"_a, "camera"_a,
+      "The line's centre on the floor (x forward, y left, m) from the band's row spans, or "
+      "None.");
 
   py::class_<LineMeasurement> line(m, "LineMeasurement");
   line.def_readwrite("error", &LineMeasurement::error)

@@ -4,8 +4,11 @@
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 #include <vector>
+
+#include "follow_bot_common/testing/harness_camera.h"
 
 namespace follow_bot {
 namespace {
@@ -309,6 +312,12 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   EXPECT_TRUE(entering.centre_found);
   EXPECT_DOUBLE_EQ(entering.centre_x, 24.5);
   EXPECT_DOUBLE_EQ(entering.centre_y, 374.5);
+  ASSERT_EQ(entering.spans.size(), 10u);  // rows 370..379, the whole run's outer edges
+  for (size_t i = 0; i < entering.spans.size(); ++i) {
+    EXPECT_EQ(entering.spans[i].row, 370.0 + i);
+    EXPECT_EQ(entering.spans[i].left, 19.5);
+    EXPECT_EQ(entering.spans[i].right, 29.5);
+  }
 
   cv::Mat right = greyFrame();
   paintStripe(right, 630, 10, 360, 365);  // cut by the right edge
@@ -318,6 +327,10 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   EXPECT_EQ(leaving.centre_pixel_count, 150);
   EXPECT_DOUBLE_EQ(leaving.centre_x, 604.5);
   EXPECT_DOUBLE_EQ(leaving.centre_y, 372.0);
+  ASSERT_EQ(leaving.spans.size(), 15u);
+  EXPECT_EQ(leaving.spans.front().row, 365.0);
+  EXPECT_EQ(leaving.spans.front().left, 599.5);
+  EXPECT_EQ(leaving.spans.front().right, 609.5);
 
   // In one row a cut patch and a whole run: only the patch is left out.
   cv::Mat both = greyFrame();
@@ -330,6 +343,9 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   EXPECT_EQ(beside.centre_pixel_count, 11 * 20);
   EXPECT_DOUBLE_EQ(beside.centre_x, 305.0);
   EXPECT_DOUBLE_EQ(beside.centre_y, 369.5);
+  ASSERT_EQ(beside.spans.size(), 20u);
+  EXPECT_EQ(beside.spans.back().left, 299.5);
+  EXPECT_EQ(beside.spans.back().right, 310.5);
 
   // A row entirely of line colour is cut at both edges.
   cv::Mat full_row = greyFrame();
@@ -339,6 +355,38 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   EXPECT_EQ(across.centre_pixel_count, 11 * 19);
   EXPECT_DOUBLE_EQ(across.centre_x, 305.0);
   EXPECT_DOUBLE_EQ(across.centre_y, 370.0);
+  ASSERT_EQ(across.spans.size(), 19u);
+  EXPECT_EQ(across.spans.front().row, 361.0);
+
+  // Two whole runs in a row (a gap in the paint) and a cut one: the span is the whole runs'.
+  cv::Mat gap = greyFrame();
+  paintStripe(gap, 300, 4, 360, 380);
+  paintStripe(gap, 307, 4, 360, 380);
+  paintStripe(gap, 630, 10, 360, 380);
+  const BandMeasurement gapped = detector.detect(gap).band;
+  ASSERT_EQ(gapped.spans.size(), 20u);
+  EXPECT_EQ(gapped.spans[7].left, 299.5);
+  EXPECT_EQ(gapped.spans[7].right, 310.5);
+}
+
+// Whole runs in fewer than 5 rows: the line crosses the band too obliquely for its centre.
+TEST(LineDetector, TheCentreNeedsWholeRunsInFiveRows) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 0, 20, 360, 380);    // cut in every row
+  paintStripe(frame, 100, 40, 375, 379);  // whole in rows 375..378
+  const BandMeasurement four = LineDetector().detect(frame).band;
+  EXPECT_EQ(four.centre_pixel_count, 160);
+  EXPECT_EQ(four.spans.size(), 4u);
+  EXPECT_FALSE(four.centre_found);
+  paintStripe(frame, 100, 40, 374, 375);
+  EXPECT_TRUE(LineDetector().detect(frame).band.centre_found);
+  // A band of 3 rows needs them all.
+  LineDetectorConfig short_band;
+  short_band.band.rows = 3;
+  short_band.min_pixels = 1;
+  cv::Mat stripe = greyFrame();
+  paintStripe(stripe, 300, 10, 0, 480);
+  EXPECT_TRUE(LineDetector(short_band).detect(stripe).band.centre_found);
 }
 
 TEST(LineDetector, ALineCutInEveryRowIsFoundButHasNoCentre) {
@@ -387,6 +435,80 @@ TEST(LineDetector, TheNearestBlobsCentreLeavesOutItsCutRuns) {
   EXPECT_EQ(on_tape.pixel_count, 40 * 15);
   EXPECT_EQ(on_tape.centre_pixel_count, 0);
   EXPECT_FALSE(on_tape.centre_found);
+}
+
+// The spans of a `half_width` line along the circle of `radius` about `centre` (floor, m) in
+// rows [row_begin, row_end) of `camera`: where each row's floor line meets the circles
+// radius +- half_width, the crossing nearest `near`, in exact (fractional) columns.
+std::vector<BandMeasurement::RowSpan> curveSpans(const CameraGeometry& camera, int row_begin,
+                                                 int row_end, const cv::Point2d& centre,
+                                                 double radius, double half_width,
+                                                 const cv::Point2d& near) {
+  std::vector<BandMeasurement::RowSpan> spans;
+  for (int row = row_begin; row < row_end; ++row) {
+    const cv::Point2d a = *pixelToGround(camera, camera.cx - 100.0, row);
+    const cv::Point2d along = *pixelToGround(camera, camera.cx + 100.0, row) - a;
+    double columns[2];
+    for (int side = 0; side < 2; ++side) {
+      const double r = radius + (side == 0 ? -half_width : half_width);
+      // |a + t along - centre| = r, the root nearest `near`.
+      const cv::Point2d d = a - centre;
+      const double qa = along.dot(along), qb = 2.0 * along.dot(d), qc = d.dot(d) - r * r;
+      const double root = std::sqrt(qb * qb - 4.0 * qa * qc);
+      const cv::Point2d first = a + (-qb - root) / (2.0 * qa) * along;
+      const cv::Point2d second = a + (-qb + root) / (2.0 * qa) * along;
+      const cv::Point2d& hit = cv::norm(first - near) < cv::norm(second - near) ? first : second;
+      columns[side] = projectToPixel(camera, hit).x;
+    }
+    spans.push_back({static_cast<double>(row), std::min(columns[0], columns[1]),
+                     std::max(columns[0], columns[1])});
+  }
+  return spans;
+}
+
+// The 0.5 m level camera's band (the image's bottom 20 rows, ~1.2 m ahead) across a 5 cm line
+// on 1 m and 0.6 m curves, crossing its rows at up to 55 deg from square: the centre lies on the
+// line's centre, where the spans' middles (and so the band's centroid) lie mm inside the curve.
+TEST(FloorCentre, PlacesTheCentreOfACurvedLineOnIt) {
+  CameraGeometry camera = harnessCamera();
+  camera.height_m = 0.5;
+  camera.pitch_rad = 0.0;
+  const cv::Point2d crossing = *pixelToGround(camera, camera.cx, 469.5);
+  for (double radius : {1.0, -1.0, 0.6}) {  // negative: the centre to the right
+    for (double heading_deg : {0.0, 30.0, 55.0}) {
+      const double heading = degrees(heading_deg);
+      const cv::Point2d centre =
+          crossing + radius * cv::Point2d(-std::sin(heading), std::cos(heading));
+      BandMeasurement band;
+      band.spans = curveSpans(camera, 460, 480, centre, std::abs(radius), 0.025, crossing);
+      const std::optional<cv::Point2d> found = floorCentre(band, camera);
+      ASSERT_TRUE(found);
+      const double off_line = cv::norm(*found - centre) - std::abs(radius);
+      EXPECT_LT(std::abs(off_line), 1e-4) << radius << " m, " << heading_deg << " deg";
+      // The spans' middles, on the floor, and their mean.
+      cv::Point2d middles(0.0, 0.0);
+      for (const BandMeasurement::RowSpan& span : band.spans) {
+        middles += *pixelToGround(camera, 0.5 * (span.left + span.right), span.row);
+      }
+      middles *= 1.0 / band.spans.size();
+      const double middles_inside = std::abs(radius) - cv::norm(middles - centre);
+      if (heading_deg == 55.0) EXPECT_GT(middles_inside, 2e-3) << radius << " m";
+    }
+  }
+  // A straight line across the band: its centre exactly.
+  BandMeasurement straight;
+  for (int row = 460; row < 480; ++row) straight.spans.push_back({row * 1.0, 300.0, 340.0});
+  const std::optional<cv::Point2d> ahead = floorCentre(straight, camera);
+  ASSERT_TRUE(ahead);
+  EXPECT_NEAR(ahead->y, 0.0, 1e-12);
+  // One row: its span's middle; none: nothing.
+  BandMeasurement one;
+  one.spans = {{470.0, 300.0, 340.0}};
+  EXPECT_NEAR(floorCentre(one, camera)->y, pixelToGround(camera, 320.0, 470.0)->y, 1e-12);
+  EXPECT_FALSE(floorCentre(BandMeasurement(), camera));
+  // A span above the horizon does not meet the floor.
+  one.spans.push_back({100.0, 300.0, 340.0});
+  EXPECT_FALSE(floorCentre(one, camera));
 }
 
 TEST(LineDetector, IgnoresLineColourOutsideTheBand) {

@@ -155,6 +155,7 @@ BandMeasurement bandAt(std::optional<double> column, double row) {
   measured.centre_found = true;
   measured.centre_x = *column;
   measured.centre_y = row;
+  measured.spans = {{row, *column - 5.0, *column + 5.0}};  // a 10 px wide line
   measured.error_px = *column - kWidth / 2.0;
   measured.error_normalised = std::clamp(measured.error_px / (kWidth / 2.0), -1.0, 1.0);
   measured.confidence = 1.0;

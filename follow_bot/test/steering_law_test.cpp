@@ -46,6 +46,7 @@ BandMeasurement scriptedBand(double column, double row, int pixel_count = 400,
   band.centre_found = band.found;
   band.centre_x = column;
   band.centre_y = row;
+  band.spans = {{row, column - 5.0, column + 5.0}};  // a 10 px wide line
   band.error_px = column - 320.0;
   band.error_normalised = band.error_px / 320.0;
   band.confidence = confidence;

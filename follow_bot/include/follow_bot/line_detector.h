@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -168,17 +169,38 @@ struct BandMeasurement {
   // pixels that reaches the image's left or right edge is cut there, so its middle is not the
   // line's: where a curve enters or leaves the view the centroid lies up to half a line width
   // off the line (on the floor), while a whole run's middle is on it (a row sees the floor at
-  // one depth, so along a row the image is an affine map of the floor). Ground positions
-  // (PathLaw) use this; the centroid above stays the lecture's.
+  // one depth, so along a row the image is an affine map of the floor). The path law places its
+  // sightings with floorCentre() (the spans below); the centroid above stays the lecture's.
   int centre_pixel_count = 0;  // line pixels in runs that reach neither side edge
-  bool centre_found = false;   // centre_pixel_count >= min_pixels
-  double centre_x = 0.0;       // full-image pixel coordinates, valid when centre_pixel_count > 0
+  // centre_pixel_count >= min_pixels, in at least 5 rows (all of a shorter band): over fewer the
+  // line crosses the rows too obliquely for floorCentre() to place its centre.
+  bool centre_found = false;
+  double centre_x = 0.0;  // full-image pixel coordinates, valid when centre_pixel_count > 0
   double centre_y = 0.0;
+  // Each scanned row's whole runs, top to bottom (rows without any left out): where the line's
+  // edges cross that row. floorCentre() measures the line's centre on the floor from them.
+  struct RowSpan {
+    double row = 0.0;    // pixel centres at integers, as centre_y
+    double left = 0.0;   // the left edge of the row's first whole run (its first pixel - 0.5)
+    double right = 0.0;  // the right edge of its last (last pixel + 0.5)
+  };
+  std::vector<RowSpan> spans;
   int row_begin = 0;  // rows actually scanned: [row_begin, row_end)
   int row_end = 0;
   double distance_m = 0.0;  // and the rest of the band's placeBand() result
   bool clamped = false;
 };
+
+// The line's centre on the floor (base_link: x forward, y left, m) from the band's row spans.
+// A curve crosses a far band's rows obliquely, over many columns, so the centroid of its patch
+// (centre_x) lies inside the curve, by 0.3-0.9 cm on a 1 m curve seen 1.2 m ahead; a span's
+// middle is off the line too where its row cuts the line obliquely. Instead the spans' edges are
+// projected to the floor, where the line's two edges are parallel curves, and one quadratic
+// across the patch's principal axis (a line for two rows, a constant for one) is fitted to both
+// at once, the edges at plus and minus half the line's width from it; the centre is that curve
+// at the rows' mean along the axis. Frames through a lens are rectified first. Empty without
+// spans or when an edge does not project to the floor.
+std::optional<cv::Point2d> floorCentre(const BandMeasurement& band, const CameraGeometry& camera);
 
 struct LineMeasurement {
   std::string error;  // why the frame was rejected; empty when it was processed
@@ -228,14 +250,20 @@ class LineDetector {
   struct RowSums {
     int count = 0;
     std::int64_t sum_x = 0;
-    int left_run = 0;   // line pixels fill columns [0, left_run)
-    int run_begin = 0;  // first column of the run holding the latest line pixel
-    int last = -2;      // the latest line pixel's column
+    int left_run = 0;                // line pixels fill columns [0, left_run)
+    int run_begin = 0;               // first column of the run holding the latest line pixel
+    int last = -2;                   // the latest line pixel's column
+    int first_after_left_run = -1;   // the first line pixel's column past the left run
+    int last_before_run_begin = -2;  // the last line pixel's column before run_begin
     void add(int x, bool is_line) {
       count += is_line ? 1 : 0;
       sum_x += is_line ? x : 0;
+      first_after_left_run =
+          (is_line && x != left_run && first_after_left_run < 0) ? x : first_after_left_run;
       left_run += (is_line && x == left_run) ? 1 : 0;
-      run_begin = (is_line && x != last + 1) ? x : run_begin;
+      const bool new_run = is_line && x != last + 1;
+      last_before_run_begin = new_run ? last : last_before_run_begin;
+      run_begin = new_run ? x : run_begin;
       last = is_line ? x : last;
     }
   };
@@ -246,6 +274,7 @@ class LineDetector {
     std::int64_t count = 0, sum_x = 0, sum_y = 0;
     int occupied_rows = 0;
     std::int64_t whole_count = 0, whole_sum_x = 0, whole_sum_y = 0;
+    std::vector<BandMeasurement::RowSpan> spans;
     void addRow(int y, const RowSums& row, int image_width);
   };
 

@@ -13,11 +13,13 @@
 // offset: d'' + heading_gain d' + lateral_gain d = 0 in distance travelled (' = d/ds),
 // independent of speed.
 //
-// A sighting is the ground point of the band's line centre (BandMeasurement::centre_x), not
-// of its centroid: where a curve enters or leaves the view the image's side edge cuts the line's
-// patch, whose centroid then lies up to half a line width off the line, and the bridges below
-// extrapolate the fitted heading from there (on a camera whose band sees the floor 1 m ahead
-// the headings came out 11-32 deg wrong, and the robot ran 16 cm off the line).
+// A sighting is the band's line centre on the floor (floorCentre: the line's edges in the rows
+// of whole runs, fitted on the floor), not the ground point of its centroid: where a curve
+// enters or leaves the view the image's side edge cuts the line's patch, whose centroid then
+// lies up to half a line width off the line, and the bridges below extrapolate the fitted
+// heading from there (on a camera whose band sees the floor 1 m ahead the headings came out
+// 11-32 deg wrong, and the robot ran 16 cm off the line); and a far band sees a curve across
+// many columns, where the centroid of the curved patch lies mm inside the curve.
 //
 // Where the camera never saw the line (its nearest floor lies beyond the end of a tight curve,
 // or the paint has a gap) successive sightings of the band jump by bridge_gap or more. The end
@@ -110,8 +112,7 @@ class PathLaw : public SteeringLaw {
   void appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps);
   void forgetStalePoints(double stamp);
   void remember(const LineMeasurement& measurement, double stamp);
-  // Stores the ground point of the band's line centre (centre_x, centre_y) unless it has none
-  // or it repeats the band's latest.
+  // Stores the band's floorCentre() unless it has none or it repeats the band's latest.
   void rememberBand(const BandMeasurement& band, bool look_ahead, double stamp);
   Twist2D drive(double curvature) const;
 

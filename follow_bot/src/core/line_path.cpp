@@ -424,7 +424,7 @@ void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
   };
   const bool near = seen(measurement.band);
   const bool ahead = seen(measurement.look_ahead);
-  // Only a band holding whole runs of the line knows where its centre is (centre_x); a line cut
+  // Only a band holding whole runs of the line knows where its centre is (centre_found); a line cut
   // by the image's side edge is remembered from the frames that see it whole, and is still a
   // sighting for the fallback.
   if (near && measurement.band.centre_found) rememberBand(measurement.band, false, stamp);
@@ -439,9 +439,7 @@ void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
 }
 
 void PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {
-  // A raw frame's pixel goes through the lens first (rectifyPixel: unchanged without one).
-  const cv::Point2d pixel = rectifyPixel(camera_, {band.centre_x, band.centre_y});
-  const std::optional<cv::Point2d> ground = pixelToGround(camera_, pixel.x, pixel.y);
+  const std::optional<cv::Point2d> ground = floorCentre(band, camera_);
   if (!ground) return;
   const auto latest_of_band =
       std::find_if(points_.rbegin(), points_.rend(),
