@@ -31,6 +31,16 @@ cv::Mat floorWithBall(const cv::Scalar& colour, cv::Point centre = {400, 260}, i
   return bgr;
 }
 
+// The harness camera's camera_info: 640x480, 60 deg horizontal field of view.
+sensor_msgs::CameraInfo harnessCameraInfo() {
+  sensor_msgs::CameraInfo info;
+  info.width = 640;
+  info.height = 480;
+  const double f = 320.0 / std::tan(M_PI / 6.0);
+  info.K = {f, 0.0, 320.0, 0.0, f, 240.0, 0.0, 0.0, 1.0};
+  return info;
+}
+
 bool isZero(const geometry_msgs::Twist& t) { return t.linear.x == 0.0 && t.angular.z == 0.0; }
 
 // Finite, within the default CommandOutput limits, planar.
@@ -265,9 +275,7 @@ TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
   }
   EXPECT_GE(logsFrom("/beacon_approach", "ignoring camera_info"), 1);
 
-  sensor_msgs::CameraInfo valid = zeros;  // the harness camera: 640x480, 60 deg field of view
-  const double f = 320.0 / std::tan(M_PI / 6.0);
-  valid.K = {f, 0.0, 320.0, 0.0, f, 240.0, 0.0, 0.0, 1.0};
+  const sensor_msgs::CameraInfo valid = harnessCameraInfo();
   double max_linear = 0.0;
   for (int i = 0; i < 15; ++i) {
     approach_.camera_info.publish(valid);
@@ -283,11 +291,7 @@ TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
 // stream): the intrinsics are scaled to the frame and the ball is ranged and approached. Frames of
 // another shape are dropped with an error naming both sizes, and nothing is sent for them.
 TEST_F(BeaconChaserNode, ApproachFitsCameraInfoToTheFrameSize) {
-  sensor_msgs::CameraInfo full;
-  full.width = 640;
-  full.height = 480;
-  const double f = 320.0 / std::tan(M_PI / 6.0);
-  full.K = {f, 0.0, 320.0, 0.0, f, 240.0, 0.0, 0.0, 1.0};
+  const sensor_msgs::CameraInfo full = harnessCameraInfo();
   const cv::Mat ball = floorWithBall(kGreen, {330, 250});
   cv::Mat half;
   cv::resize(ball, half, cv::Size(320, 240), 0, 0, cv::INTER_AREA);

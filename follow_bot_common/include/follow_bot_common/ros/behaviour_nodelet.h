@@ -145,15 +145,19 @@ class BehaviourNodelet : public CheckedNodelet {
   }
 
   // Subscribes `handle(const M&)` to `topic` (queue 1), guarded and under mutex() like the
-  // camera callbacks.
+  // camera callbacks. TCP_NODELAY: without it a small message (a camera_info sent just before
+  // its frame) can wait ~40 ms for Nagle's algorithm and arrive after the frame.
   template <typename M, typename Handle>
   ros::Subscriber subscribe(ros::NodeHandle& nh, const std::string& topic, Handle handle) {
-    return nh.subscribe<M>(topic, 1, [this, topic, handle](const boost::shared_ptr<const M>& msg) {
-      guardedCallback(topic.c_str(), [&] {
-        std::lock_guard<boost::recursive_mutex> lock(mutex_);
-        handle(*msg);
-      });
-    });
+    const boost::function<void(const boost::shared_ptr<const M>&)> callback =
+        [this, topic, handle](const boost::shared_ptr<const M>& msg) {
+          guardedCallback(topic.c_str(), [&] {
+            std::lock_guard<boost::recursive_mutex> lock(mutex_);
+            handle(*msg);
+          });
+        };
+    return nh.subscribe<M>(topic, 1, callback, ros::VoidConstPtr(),
+                           ros::TransportHints().tcpNoDelay());
   }
 
  private:
