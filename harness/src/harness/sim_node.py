@@ -142,8 +142,8 @@ class SimNode:
             self.lockstep, self.reply_timeout = scenario.lockstep, scenario.reply_timeout
             start, perturbations = scenario.start, scenario.perturbations
             self.stop_at_lap = scenario.stop_when == "lap_complete"
-            self.stop_when_still = scenario.stop_when == "still"
-            self.still_stop_s = scenario.still_stop_s
+            # stop_when: still ends the run after this long without motion (None: it does not)
+            self.still_stop_s = scenario.still_stop_s if scenario.stop_when == "still" else None
         else:
             world = load_world(resolve_world_path(rospy.get_param("~world", "course")))
             transport = world.camera_transport
@@ -152,7 +152,7 @@ class SimNode:
             self.lockstep = bool(rospy.get_param("~lockstep", True))
             self.reply_timeout = float(rospy.get_param("~reply_timeout", 2.0))
             start, perturbations, self.stop_at_lap = None, Perturbations(), False
-            self.stop_when_still = False
+            self.still_stop_s = None
         if self.duration < 0 or not math.isfinite(self.duration):
             raise ValueError(f"~duration must be >= 0 s, got {self.duration}")
         self.sim = Simulation(world, rate_hz=self.rate_hz, start=start, perturbations=perturbations)
@@ -273,7 +273,7 @@ class SimNode:
     def _finished(self) -> bool:
         if self.duration and self.sim.time >= self.duration - 1e-9:
             return True
-        if self.stop_when_still and self._still_for(self.still_stop_s):
+        if self.still_stop_s is not None and self._still_for(self.still_stop_s):
             return True
         if self.laps is not None and self.sim.step_index % 15 == 0 and self.sim.record.pose:
             recent = np.asarray(self.sim.record.pose[-15:])[:, :2]
