@@ -138,6 +138,18 @@ class BeaconChaserNode : public ::testing::Test {
     return chaser.received;
   }
 
+  // 15 frames of `image` to beacon_approach, each after `info`: every one answered by one sane
+  // command; `max_linear`: the fastest forward speed among them.
+  void approach(const sensor_msgs::CameraInfo& info, const cv::Mat& image, double* max_linear) {
+    for (int i = 0; i < 15; ++i) {
+      approach_.camera_info.publish(info);
+      const auto replies = sendAnswered(approach_, frame(image));
+      ASSERT_EQ(replies.size(), 1u) << "frame " << i;
+      EXPECT_TRUE(sane(replies[0]));
+      *max_linear = std::max(*max_linear, replies[0].linear.x);
+    }
+  }
+
   sensor_msgs::Image frame(const cv::Mat& bgr) {
     stamp_ += ros::Duration(1.0 / 30.0);
     return follow_bot::test::bgrFrame(bgr, stamp_);
@@ -277,13 +289,7 @@ TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
 
   const sensor_msgs::CameraInfo valid = harnessCameraInfo();
   double max_linear = 0.0;
-  for (int i = 0; i < 15; ++i) {
-    approach_.camera_info.publish(valid);
-    const auto replies = sendAnswered(approach_, frame(ball));
-    ASSERT_EQ(replies.size(), 1u);
-    EXPECT_TRUE(sane(replies[0]));
-    max_linear = std::max(max_linear, replies[0].linear.x);
-  }
+  ASSERT_NO_FATAL_FAILURE(approach(valid, ball, &max_linear));
   EXPECT_GT(max_linear, 0.05) << "with intrinsics the ball is ranged and approached";
 }
 
@@ -296,13 +302,7 @@ TEST_F(BeaconChaserNode, ApproachFitsCameraInfoToTheFrameSize) {
   cv::Mat half;
   cv::resize(ball, half, cv::Size(320, 240), 0, 0, cv::INTER_AREA);
   double max_linear = 0.0;
-  for (int i = 0; i < 15; ++i) {
-    approach_.camera_info.publish(full);
-    const auto replies = sendAnswered(approach_, frame(half));
-    ASSERT_EQ(replies.size(), 1u);
-    EXPECT_TRUE(sane(replies[0]));
-    max_linear = std::max(max_linear, replies[0].linear.x);
-  }
+  ASSERT_NO_FATAL_FAILURE(approach(full, half, &max_linear));
   EXPECT_GT(max_linear, 0.05) << "the half-size frame is ranged through scaled intrinsics";
 
   cv::Mat wide;
