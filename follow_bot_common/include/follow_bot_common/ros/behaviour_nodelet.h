@@ -68,8 +68,10 @@ struct BehaviourOptions {
 //    a throttled error. A separate subscription, not a CameraSubscriber: a behaviour keeps
 //    running on frames when camera_info is late or missing (then it says what it cannot do).
 //    The intrinsics are those of the frame's size: camera_info's scaled when the frame is its
-//    image resized by one factor (binning, a resized stream, a new camera_info not there yet);
-//    a frame of another shape is dropped with a throttled error naming both sizes.
+//    image resized by one factor (binning, a resized stream, a new camera_info not there yet).
+//    A camera_info that does not describe the frames leaves the intrinsics in force when they
+//    do (a throttled warning); a frame that neither describes is dropped with a throttled error
+//    naming both sizes.
 //  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
 //  stamp checks;
 //    a bad frame is dropped with a throttled error), the camera's mounting for the frame (until
