@@ -1,5 +1,12 @@
-"""Text a test asks to show in the closing summary (record_property("summary", text)): it reaches
+"""Shared pytest hooks and fixtures.
+
+Text a test asks to show in the closing summary (record_property("summary", text)): it reaches
 the terminal from pytest-xdist workers too, where a test's own print does not."""
+
+import warnings
+from pathlib import Path
+
+import pytest
 
 
 def pytest_terminal_summary(terminalreporter):
@@ -8,3 +15,20 @@ def pytest_terminal_summary(terminalreporter):
             for name, value in getattr(report, "user_properties", ()):
                 if name == "summary" and report.when == "call":
                     terminalreporter.write_line(value)
+
+
+# Real robot-camera frames that are not ours to ship (../shared/realdata/README.md): tests read
+# them when the folder is beside the repository and skip, saying why once, when it is not.
+REALDATA = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
+_realdata_absence_said = False
+
+
+@pytest.fixture(scope="session")
+def realdata() -> Path:
+    global _realdata_absence_said
+    if not REALDATA.is_dir():
+        if not _realdata_absence_said:
+            warnings.warn(f"{REALDATA} is absent: the tests on real robot-camera frames are skipped")
+            _realdata_absence_said = True
+        pytest.skip(f"no real robot-camera frames at {REALDATA} (see its README when present)")
+    return REALDATA
