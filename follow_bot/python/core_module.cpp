@@ -127,7 +127,8 @@ void bindLineDetector(py::module_& m) {
       .def_readwrite("look_ahead_enabled", &LineDetectorConfig::look_ahead_enabled)
       .def_readwrite("look_ahead", &LineDetectorConfig::look_ahead)
       .def_readwrite("min_pixels", &LineDetectorConfig::min_pixels)
-      .def_readwrite("max_width_fraction", &LineDetectorConfig::max_width_fraction);
+      .def_readwrite("max_width_fraction", &LineDetectorConfig::max_width_fraction)
+      .def_readwrite("blob_chroma_fraction", &LineDetectorConfig::blob_chroma_fraction);
   defKeywordInit(config, static_cast<Validator<LineDetectorConfig>>(&validate));
 
   using RowSpan = BandMeasurement::RowSpan;

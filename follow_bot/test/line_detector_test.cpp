@@ -59,8 +59,15 @@ std::vector<std::pair<HsvColor, HsvColor>> boundSets() {
   };
 }
 
-LineDetectorConfig withBounds(const HsvColor& lower, const HsvColor& upper) {
+// The lecture's pipeline: every line pixel in the band counts, however many blobs they form.
+LineDetectorConfig lectureConfig() {
   LineDetectorConfig config;
+  config.blob_chroma_fraction = 0.0;
+  return config;
+}
+
+LineDetectorConfig withBounds(const HsvColor& lower, const HsvColor& upper) {
+  LineDetectorConfig config = lectureConfig();
   config.lower = lower;
   config.upper = upper;
   return config;
@@ -232,11 +239,47 @@ cv::Mat lineAndTapeFrame() {
   return frame;
 }
 
-TEST(LineDetector, WithoutAPreviousSightingTheTapePullsTheCentroid) {
-  const BandMeasurement band = LineDetector().detect(lineAndTapeFrame()).band;
+TEST(LineDetector, AsTheLectureWithoutAPreviousSightingTheTapePullsTheCentroid) {
+  const BandMeasurement band = LineDetector(lectureConfig()).detect(lineAndTapeFrame()).band;
   EXPECT_EQ(band.pixel_count, 11 * 20 + 40 * 15);
   // (305 * 220 + 519.5 * 600) / 820
   EXPECT_DOUBLE_EQ(band.centroid_x, (305.0 * 220 + 519.5 * 600) / 820);
+}
+
+// Paint beside a larger patch of floor that a colour cast pushed into the colour box (HSV
+// (25, 119, 150): in the default box, but far less saturated than paint), and a few such pixels
+// at the image edge: only the paint is measured, whatever the sizes.
+TEST(LineDetector, WithoutAPreviousSightingWeaklySaturatedBlobsAreLeftOut) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 300, 11, 0, 480);
+  const cv::Scalar cast_floor(80, 138, 150);  // BGR
+  frame(cv::Range(362, 380), cv::Range(420, 520)).setTo(cast_floor);
+  frame(cv::Range(360, 380), cv::Range(637, 640)).setTo(cast_floor);
+  cv::Mat hsv;
+  cv::cvtColor(frame(cv::Rect(420, 370, 1, 1)), hsv, cv::COLOR_BGR2HSV);
+  ASSERT_EQ(hsv.at<cv::Vec3b>(0, 0), cv::Vec3b(25, 119, 150));
+
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_TRUE(band.found);
+  EXPECT_EQ(band.pixel_count, 11 * 20);
+  EXPECT_DOUBLE_EQ(band.centroid_x, 305.0);
+  ASSERT_EQ(band.spans.size(), 20u);
+  EXPECT_DOUBLE_EQ(band.spans.front().left, 299.5);
+  EXPECT_DOUBLE_EQ(band.spans.front().right, 310.5);
+  // The lecture's pipeline takes every pixel in the box: the cast floor pulls it far right.
+  const BandMeasurement lecture = LineDetector(lectureConfig()).detect(frame).band;
+  EXPECT_EQ(lecture.pixel_count, 11 * 20 + 100 * 18 + 3 * 20);
+}
+
+// A saturated speck below min_pixels does not set the bar: the paler line-sized blob stays.
+TEST(LineDetector, ASaturatedSpeckBelowMinPixelsDoesNotSetTheBar) {
+  cv::Mat frame = greyFrame();
+  paintStripe(frame, 100, 4, 362, 368);  // 24 px of paint, fewer than min_pixels (30)
+  const cv::Scalar paler_yellow(60, 180, 190);
+  frame(cv::Range(0, 480), cv::Range(400, 411)).setTo(paler_yellow);
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_EQ(band.pixel_count, 11 * 20 + 4 * 6);
+  EXPECT_DOUBLE_EQ(band.centroid_x, (405.0 * 220 + 101.5 * 24) / 244);
 }
 
 TEST(LineDetector, KeepsTheBlobNearestThePreviousSighting) {
@@ -279,8 +322,9 @@ TEST(LineDetector, APreviousSightingChangesNothingForASingleBlob) {
   EXPECT_EQ(hinted.centroid_y, alone.centroid_y);
   EXPECT_EQ(hinted.confidence, alone.confidence);
   // A hint from a frame of another size is ignored: all line pixels, as without one.
+  const LineDetector lecture(lectureConfig());
   const BandMeasurement other_size =
-      detector.detect(lineAndTapeFrame(), detector.detect(greyFrame(240, 320))).band;
+      lecture.detect(lineAndTapeFrame(), lecture.detect(greyFrame(240, 320))).band;
   EXPECT_EQ(other_size.pixel_count, 11 * 20 + 40 * 15);
 }
 
@@ -730,6 +774,8 @@ TEST(LineDetector, ValidatesItsConfiguration) {
             "min_pixels must be >= 1, got 0");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.max_width_fraction = 0.0; }),
             "max_width_fraction must be in (0, 1], got 0");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.blob_chroma_fraction = 1.5; }),
+            "blob_chroma_fraction must be in [0, 1], got 1.5");
   LineDetectorConfig bad;
   bad.band.rows = -5;
   EXPECT_THROW(LineDetector{bad}, std::invalid_argument);

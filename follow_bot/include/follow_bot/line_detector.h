@@ -142,6 +142,13 @@ struct LineDetectorConfig {
   // A band is `found` with at least this many line pixels. Measurements with fewer (but > 0)
   // pixels still carry a centroid, which is what the lecture uses.
   int min_pixels = Defaults::min_pixels;
+  // Without a previous sighting, a band whose line pixels form several blobs leaves out the
+  // blobs whose mean chroma (max - min channel) is below this fraction of the most saturated
+  // blob's of at least min_pixels: on real floors a colour cast or glare lets patches of floor,
+  // or a tinted white line, into the colour box, but they are far less saturated than paint
+  // (on the labelled real frames every fraction from 0.6 to 0.9 separates them). 0: every line
+  // pixel counts, as the lecture.
+  double blob_chroma_fraction = Defaults::blob_chroma_fraction;
   // Confidence falls once the line's mean width per row exceeds this fraction of the image
   // width (a frame full of yellow is not a line); see BandMeasurement::confidence.
   double max_width_fraction = 0.35;
@@ -228,7 +235,8 @@ class LineDetector {
   // when that band was found and its mask now holds several 8-connected blobs, only the blob
   // nearest the previous centroid column is measured, so a line-coloured patch beside the line
   // (tape, a reflection) does not pull the centroid. With one blob, or no previous sighting, the
-  // result is detect(bgr)'s, bit for bit.
+  // result is detect(bgr)'s, bit for bit (which leaves out weakly saturated blobs:
+  // LineDetectorConfig::blob_chroma_fraction).
   LineMeasurement detect(const cv::Mat& bgr, const LineMeasurement& previous) const;
 
   // The lecture's mask: CV_8UC1 of the frame's size, 255 on line pixels inside the band(s),
@@ -255,6 +263,8 @@ class LineDetector {
     int last = -2;                   // the latest line pixel's column
     int first_after_left_run = -1;   // the first line pixel's column past the left run
     int last_before_run_begin = -2;  // the last line pixel's column before run_begin
+    int first = -1;                  // the first line pixel's column
+    int runs = 0;
     void add(int x, bool is_line) {
       count += is_line ? 1 : 0;
       sum_x += is_line ? x : 0;
@@ -262,6 +272,8 @@ class LineDetector {
           (is_line && x != left_run && first_after_left_run < 0) ? x : first_after_left_run;
       left_run += (is_line && x == left_run) ? 1 : 0;
       const bool new_run = is_line && x != last + 1;
+      runs += new_run ? 1 : 0;
+      first = (is_line && first < 0) ? x : first;
       last_before_run_begin = new_run ? last : last_before_run_begin;
       run_begin = new_run ? x : run_begin;
       last = is_line ? x : last;
@@ -275,15 +287,24 @@ class LineDetector {
     int occupied_rows = 0;
     std::int64_t whole_count = 0, whole_sum_x = 0, whole_sum_y = 0;
     std::vector<BandMeasurement::RowSpan> spans;
+    // False once the rows' runs cannot all be one 8-connected blob: a row with two runs, a row
+    // whose run does not touch the run in the row above, or line pixels again after an empty row.
+    bool one_blob = true;
+    bool previous_row_occupied = false;
+    int previous_first = 0, previous_last = 0;
     void addRow(int y, const RowSums& row, int image_width);
   };
 
   BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band,
                               std::optional<double> expected_x) const;
-  // The sums of the blob of `mask` (the band's rows from row_begin) nearest expected_x, or
-  // nothing when the mask holds a single blob.
-  static std::optional<BandSums> nearestBlobSums(const cv::Mat& mask, int row_begin,
-                                                 double expected_x);
+  // The band's 8-connected blobs of line pixels, found from each row's runs (cheaper than
+  // labelling a mask: a band holds a few dozen runs).
+  struct Blobs;
+  // The sums of the blob nearest expected_x: among those whose columns come nearest it, the
+  // largest, so a speck of noise beside the line does not win.
+  static BandSums nearestBlobSums(const Blobs& blobs, double expected_x);
+  // The sums of the blobs blob_chroma_fraction keeps, or nothing when it keeps them all.
+  std::optional<BandSums> saturatedBlobSums(const Blobs& blobs) const;
   void fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const;
 
   LineDetectorConfig config_;

@@ -1,8 +1,10 @@
 #include "follow_bot/line_detector.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -368,6 +370,8 @@ std::string validate(const LineDetectorConfig& config) {
   } else if (!std::isfinite(config.max_width_fraction) || config.max_width_fraction <= 0.0 ||
              config.max_width_fraction > 1.0) {
     message << "max_width_fraction must be in (0, 1], got " << config.max_width_fraction;
+  } else if (!(config.blob_chroma_fraction >= 0.0 && config.blob_chroma_fraction <= 1.0)) {
+    message << "blob_chroma_fraction must be in [0, 1], got " << config.blob_chroma_fraction;
   }
   return message.str();
 }
@@ -397,6 +401,94 @@ LineMeasurement LineDetector::detect(const cv::Mat& bgr, const LineMeasurement& 
   return measurement;
 }
 
+// Line pixels of a band, row by row, grouped into 8-connected blobs.
+struct LineDetector::Blobs {
+  struct Run {
+    int row = 0;              // image row
+    int begin = 0, end = 0;   // columns [begin, end]
+    int blob = 0;             // index of its root run until resolved, then of its blob
+    std::int64_t chroma = 0;  // sum over its pixels of max - min channel
+  };
+  std::vector<Run> runs;  // by row, then column
+  int row_begin = 0, row_end = 0, image_width = 0;
+  int count = 0;  // blobs
+  std::vector<int> area, first_column, last_column;
+  std::vector<std::int64_t> chroma;
+
+  // `columns`: each row's line pixels in increasing order, rows [row_begin, row_end) after each
+  // other, `row_starts[i]` where row row_begin + i starts (one more entry at the end).
+  Blobs(const cv::Mat& bgr, const int* columns, const std::vector<int>& row_starts, int first_row)
+      : row_begin(first_row),
+        row_end(first_row + static_cast<int>(row_starts.size()) - 1),
+        image_width(bgr.cols) {
+    std::vector<int> parent;
+    auto root = [&](int run) {
+      while (parent[run] != run) run = parent[run] = parent[parent[run]];
+      return run;
+    };
+    size_t previous_row_first = 0;  // the previous row's first run
+    for (int y = row_begin; y < row_end; ++y) {
+      const size_t row_first = runs.size();
+      const uchar* pixels = bgr.ptr<uchar>(y);
+      for (int i = row_starts[y - row_begin]; i < row_starts[y - row_begin + 1]; ++i) {
+        const int x = columns[i];
+        const uchar* p = pixels + 3 * x;
+        const int pixel_chroma = std::max({p[0], p[1], p[2]}) - std::min({p[0], p[1], p[2]});
+        if (runs.size() > row_first && runs.back().end == x - 1) {
+          runs.back().end = x;
+        } else {
+          runs.push_back({y, x, x, static_cast<int>(runs.size()), 0});
+          parent.push_back(runs.back().blob);
+        }
+        runs.back().chroma += pixel_chroma;
+      }
+      // Runs of adjacent rows touch when their columns overlap or meet at a corner.
+      for (size_t above = previous_row_first, here = row_first;
+           above < row_first && here < runs.size();) {
+        if (runs[above].end + 1 >= runs[here].begin && runs[here].end + 1 >= runs[above].begin) {
+          const int a = root(static_cast<int>(above)), b = root(static_cast<int>(here));
+          parent[std::max(a, b)] = std::min(a, b);
+        }
+        (runs[above].end < runs[here].end) ? ++above : ++here;
+      }
+      previous_row_first = row_first;
+    }
+    // Blobs numbered in the order of their first run, as a raster scan meets them.
+    std::vector<int> blob_of_root(runs.size(), -1);
+    for (size_t i = 0; i < runs.size(); ++i) {
+      const int r = root(static_cast<int>(i));
+      if (blob_of_root[r] < 0) {
+        blob_of_root[r] = count++;
+        area.push_back(0);
+        first_column.push_back(runs[i].begin);
+        last_column.push_back(runs[i].end);
+        chroma.push_back(0);
+      }
+      Run& run = runs[i];
+      run.blob = blob_of_root[r];
+      area[run.blob] += run.end - run.begin + 1;
+      first_column[run.blob] = std::min(first_column[run.blob], run.begin);
+      last_column[run.blob] = std::max(last_column[run.blob], run.end);
+      chroma[run.blob] += run.chroma;
+    }
+  }
+
+  // The band's sums over the pixels of the kept blobs.
+  BandSums sums(const std::vector<bool>& kept) const {
+    BandSums result;
+    size_t next = 0;
+    for (int y = row_begin; y < row_end; ++y) {
+      RowSums row;
+      for (; next < runs.size() && runs[next].row == y; ++next) {
+        if (!kept[runs[next].blob]) continue;
+        for (int x = runs[next].begin; x <= runs[next].end; ++x) row.add(x, true);
+      }
+      result.addRow(y, row, image_width);
+    }
+    return result;
+  }
+};
+
 BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& band,
                                           std::optional<double> expected_x) const {
   BandMeasurement result;
@@ -407,61 +499,89 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   result.clamped = placement.clamped;
   const int band_rows = result.row_end - result.row_begin;
 
-  // The band's mask, kept only when a blob may have to be picked out of it.
-  cv::Mat mask;
-  if (expected_x && band_rows > 0) mask = cv::Mat::zeros(band_rows, bgr.cols, CV_8UC1);
+  // Each row's line pixel columns, kept in case a blob has to be picked out of the band. Every
+  // candidate is written and only line pixels advance the end: no branch on the coin toss.
+  const bool may_pick = (expected_x || config_.blob_chroma_fraction > 0.0) && band_rows > 0;
+  // Left uninitialised: only the entries below `end` are ever read.
+  const std::unique_ptr<int[]> columns(may_pick ? new int[static_cast<size_t>(band_rows) * bgr.cols]
+                                                : nullptr);
+  std::vector<int> row_starts(may_pick ? band_rows + 1 : 0, 0);
+  int end = 0;
 
   // The lecture's moments, divided by 255: m00 = count, m10 = sum_x, m01 = sum_y.
   BandSums sums;
   for (int y = result.row_begin; y < result.row_end; ++y) {
     RowSums row;
-    uchar* mask_row = mask.empty() ? nullptr : mask.ptr<uchar>(y - result.row_begin);
-    visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols, [&](int x, bool is_line) {
-      row.add(x, is_line);
-      if (mask_row != nullptr) mask_row[x] = is_line ? 255 : 0;
-    });
+    if (may_pick) {
+      visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols, [&](int x, bool is_line) {
+        row.add(x, is_line);
+        columns[end] = x;
+        end += is_line ? 1 : 0;
+      });
+      row_starts[y - result.row_begin + 1] = end;
+    } else {
+      visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols,
+                      [&](int x, bool is_line) { row.add(x, is_line); });
+    }
     sums.addRow(y, row, bgr.cols);
   }
-  if (!mask.empty() && sums.count > 0) {
-    sums = nearestBlobSums(mask, result.row_begin, *expected_x).value_or(sums);
+  if (may_pick && !sums.one_blob) {
+    const Blobs blobs(bgr, columns.get(), row_starts, result.row_begin);
+    sums =
+        expected_x ? nearestBlobSums(blobs, *expected_x) : saturatedBlobSums(blobs).value_or(sums);
   }
   fillBand(sums, bgr.cols, &result);
   return result;
 }
 
-std::optional<LineDetector::BandSums> LineDetector::nearestBlobSums(const cv::Mat& mask,
-                                                                    int row_begin,
-                                                                    double expected_x) {
-  cv::Mat labels, stats, centroids;
-  const int label_count =
-      cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
-  if (label_count <= 2) return std::nullopt;  // one blob: all line pixels are it
-  // The blob whose columns come nearest the expected column; among those that contain it, the
-  // largest, so a speck of noise beside the line does not win.
+LineDetector::BandSums LineDetector::nearestBlobSums(const Blobs& blobs, double expected_x) {
   int best = 0;
   double best_distance = 0.0;
-  for (int label = 1; label < label_count; ++label) {
-    const int left = stats.at<int>(label, cv::CC_STAT_LEFT);
-    const int right = left + stats.at<int>(label, cv::CC_STAT_WIDTH) - 1;
-    const double distance = std::max({0.0, left - expected_x, expected_x - right});
-    if (best == 0 || distance < best_distance ||
-        (distance == best_distance &&
-         stats.at<int>(label, cv::CC_STAT_AREA) > stats.at<int>(best, cv::CC_STAT_AREA))) {
-      best = label;
+  for (int blob = 0; blob < blobs.count; ++blob) {
+    const double distance = std::max(
+        {0.0, blobs.first_column[blob] - expected_x, expected_x - blobs.last_column[blob]});
+    if (blob == 0 || distance < best_distance ||
+        (distance == best_distance && blobs.area[blob] > blobs.area[best])) {
+      best = blob;
       best_distance = distance;
     }
   }
-  BandSums sums;
-  for (int y = 0; y < labels.rows; ++y) {
-    const int* label_row = labels.ptr<int>(y);
-    RowSums row;
-    for (int x = 0; x < labels.cols; ++x) row.add(x, label_row[x] == best);
-    sums.addRow(row_begin + y, row, labels.cols);
+  std::vector<bool> kept(blobs.count, false);
+  kept[best] = true;
+  return blobs.sums(kept);
+}
+
+std::optional<LineDetector::BandSums> LineDetector::saturatedBlobSums(const Blobs& blobs) const {
+  std::vector<double> mean_chroma(blobs.count);
+  double strongest = 0.0, strongest_line_sized = 0.0;
+  for (int blob = 0; blob < blobs.count; ++blob) {
+    mean_chroma[blob] = static_cast<double>(blobs.chroma[blob]) / blobs.area[blob];
+    strongest = std::max(strongest, mean_chroma[blob]);
+    if (blobs.area[blob] >= config_.min_pixels) {
+      strongest_line_sized = std::max(strongest_line_sized, mean_chroma[blob]);
+    }
   }
-  return sums;
+  const double bar = config_.blob_chroma_fraction *
+                     (strongest_line_sized > 0.0 ? strongest_line_sized : strongest);
+  std::vector<bool> kept(blobs.count);
+  bool all_kept = true;
+  for (int blob = 0; blob < blobs.count; ++blob) {
+    kept[blob] = mean_chroma[blob] >= bar;
+    all_kept = all_kept && kept[blob];
+  }
+  if (all_kept) return std::nullopt;
+  return blobs.sums(kept);
 }
 
 void LineDetector::BandSums::addRow(int y, const RowSums& row, int image_width) {
+  if (row.count > 0) {
+    const bool touches_previous =
+        previous_row_occupied && row.first <= previous_last + 1 && row.last >= previous_first - 1;
+    one_blob = one_blob && row.runs == 1 && (count == 0 || touches_previous);
+    previous_first = row.first;
+    previous_last = row.last;
+  }
+  previous_row_occupied = row.count > 0;
   count += row.count;
   sum_x += row.sum_x;
   sum_y += static_cast<std::int64_t>(row.count) * y;

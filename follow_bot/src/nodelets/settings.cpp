@@ -37,6 +37,7 @@ FollowerSettings followerSettings(const FollowerConfig& cfg) {
   detector.look_ahead_enabled = cfg.look_ahead;
   detector.look_ahead = {cfg.look_ahead_distance, cfg.band_rows};
   detector.min_pixels = cfg.min_pixels;
+  detector.blob_chroma_fraction = cfg.blob_chroma_fraction;
 
   SteeringConfig& steering = settings.steering;
   steering.mode = parseChoice("mode", cfg.mode, parseSteeringMode, "'lecture', 'pd' or 'path'");
