@@ -20,15 +20,13 @@ def pytest_terminal_summary(terminalreporter):
 # Real robot-camera frames that are not ours to ship (../shared/realdata/README.md): tests read
 # them when the folder is beside the repository and skip, saying why once, when it is not.
 REALDATA = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
-_realdata_absence_said = False
 
 
 @pytest.fixture(scope="session")
 def realdata() -> Path:
-    global _realdata_absence_said
+    # Session scope: the body runs once (per xdist worker), so the absence is said once; pytest
+    # then skips every test that asks for the folder.
     if not REALDATA.is_dir():
-        if not _realdata_absence_said:
-            warnings.warn(f"{REALDATA} is absent: the tests on real robot-camera frames are skipped")
-            _realdata_absence_said = True
+        warnings.warn(f"{REALDATA} is absent: tests on real camera frames skipped", stacklevel=2)
         pytest.skip(f"no real robot-camera frames at {REALDATA} (see its README when present)")
     return REALDATA
