@@ -137,4 +137,3 @@ def test_the_lectures_pipeline_is_what_the_colour_casts_break(realdata):
     ]
     assert len(misses) >= 4, misses
     assert all(name.startswith("pic") for name, _ in misses), misses
-
