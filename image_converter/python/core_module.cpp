@@ -63,7 +63,9 @@ void bindOverlay(py::module_& m) {
 
 void bindMatching(py::module_& m) {
   py::enum_<Detector> detector(m, "Detector");
-  detector.value("orb", Detector::kOrb).value("sift", Detector::kSift);
+  detector.value("orb", Detector::kOrb)
+      .value("sift", Detector::kSift)
+      .value("akaze", Detector::kAkaze);
   defStringInit(detector, &parseDetectorName);
 
   py::class_<MatchOptions> options(m, "MatchOptions");

@@ -126,5 +126,28 @@ TEST(RealPhotographs, GraffitiPairWithinThreePixelsAndNoWorseThanRansacAlone) {
   EXPECT_GT(*gated.held_out_median_refined_px, gated.held_out_median_ransac_px);
 }
 
+// The default detector (cfg/Matching.cfg) on the graffiti pair in both orders: the median
+// misregistration over the panorama's first image within the 1.5 px goal. Measured (OpenCV 4.6,
+// ECC gate on): ORB 0.79 px with graf1 first, 0.93 px with graf3 first; SIFT 0.38 and 2.06 px,
+// AKAZE 1.33 and 0.55 px, so only ORB holds the goal in both orders.
+TEST(RealPhotographs, GraffitiPairWithinOneAndAHalfPixelsInBothOrdersWithTheDefaultDetector) {
+  const Graffiti pair = loadGraffiti();
+  ASSERT_FALSE(pair.graf1.empty() || pair.graf3.empty()) << "install opencv-doc";
+  const PairMatch forward = matchPair(pair.graf1, pair.graf3, MatchOptions());
+  const PairMatch backward = matchPair(pair.graf3, pair.graf1, MatchOptions());
+  ASSERT_TRUE(forward.ok()) << forward.error;
+  ASSERT_TRUE(backward.ok()) << backward.error;
+  // graf3 first: the truth is the inverse, and graf1 plays graf3's part in errorOverGraf1.
+  const Graffiti swapped{pair.graf3, pair.graf1, pair.graf1_to_graf3.inv()};
+  const GridError forward_error = errorOverGraf1(pair, forward.homography);
+  const GridError backward_error = errorOverGraf1(swapped, backward.homography);
+  std::printf(
+      "graffiti, %s: graf1 first median %.3f max %.3f px; graf3 first median %.3f max %.3f px\n",
+      detectorName(kDefaultDetector).c_str(), forward_error.median, forward_error.max,
+      backward_error.median, backward_error.max);
+  EXPECT_LE(forward_error.median, 1.5);
+  EXPECT_LE(backward_error.median, 1.5);
+}
+
 }  // namespace
 }  // namespace image_converter

@@ -241,7 +241,36 @@ TEST(MatchOptions, RejectsUnusableValues) {
   Detector detector;
   EXPECT_TRUE(parseDetector("sift", detector));
   EXPECT_EQ(detector, Detector::kSift);
+  EXPECT_TRUE(parseDetector("akaze", detector));
+  EXPECT_EQ(detector, Detector::kAkaze);
   EXPECT_FALSE(parseDetector("surf", detector));
+}
+
+// A plane receding to the right, B's horizon 625 px right of its left edge: B's left edge is
+// enlarged 1.5 times, its right edge 7.5 (vertically) to 37.5 times (local area scale 2.25
+// against 281), a true view that a fixed area-scale limit of 16 at B's corners refused.
+const cv::Matx33d kStrongPerspective(1.5, 0.0, 0.0, 0.0, 1.5, 0.0, -0.0016, 0.0, 1.0);
+const cv::Size kViewB(500, 400);
+const std::vector<cv::Point2f> kMatchedB{{100, 100}, {400, 100}, {400, 300}, {100, 300}};
+
+TEST(HomographyDefect, AcceptsAStrongTruePerspective) {
+  EXPECT_EQ(homographyDefect(kStrongPerspective, kViewB, kMatchedB), "");
+  EXPECT_EQ(homographyDefect(-kStrongPerspective, kViewB, kMatchedB), "") << "sign is free";
+}
+
+TEST(HomographyDefect, RejectsAHorizonCrossingB) {
+  const cv::Matx33d beyond(1, 0, 0, 0, 1, 0, -0.003, 0, 1);  // w = 0 at x = 333 px
+  EXPECT_NE(homographyDefect(beyond, kViewB, kMatchedB).find("horizon"), std::string::npos);
+}
+
+TEST(HomographyDefect, RejectsAMirror) {
+  const cv::Matx33d mirror(-1, 0, 500, 0, 1, 0, 0, 0, 1);
+  EXPECT_NE(homographyDefect(mirror, kViewB, kMatchedB).find("mirrors"), std::string::npos);
+}
+
+TEST(HomographyDefect, RejectsCollapsingTheMatchedRegionOntoALine) {
+  const cv::Matx33d squash(1, 0, 0, 0, 0.05, 0, 0, 0, 1);
+  EXPECT_NE(homographyDefect(squash, kViewB, kMatchedB).find("squashes"), std::string::npos);
 }
 
 TEST(MatchOptions, RejectsHoldingOutEveryInlier) {

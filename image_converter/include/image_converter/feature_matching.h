@@ -14,16 +14,17 @@
 
 namespace image_converter {
 
-enum class Detector { kOrb, kSift };
+enum class Detector { kOrb, kSift, kAkaze };
 
-// "orb" or "sift" (lower case); false for anything else.
+// "orb", "sift" or "akaze" (lower case); false for anything else.
 bool parseDetector(const std::string& name, Detector& detector);
 std::string detectorName(Detector detector);
-// At compile time: "orb" or "sift". Any other name throws, which in a constant expression is a
-// compile error, so a new name in cfg/Matching.cfg cannot silently mean one of these.
+// At compile time: "orb", "sift" or "akaze". Any other name throws, which in a constant expression
+// is a compile error, so a new name in cfg/Matching.cfg cannot silently mean one of these.
 constexpr Detector detectorNamed(std::string_view name) {
   if (name == "orb") return Detector::kOrb;
   if (name == "sift") return Detector::kSift;
+  if (name == "akaze") return Detector::kAkaze;
   throw std::invalid_argument("no such detector");
 }
 // cfg/Matching.cfg's default detector (MatchingDefaults, generated), evaluated at compile time.
@@ -68,7 +69,8 @@ struct PairMatch {
   bool ok() const { return error.empty(); }
 };
 
-// The configured keypoint detector and descriptor (ORB or SIFT, max_features keypoints).
+// The configured keypoint detector and descriptor (ORB or SIFT with max_features keypoints,
+// AKAZE with its own detection threshold).
 cv::Ptr<cv::Feature2D> createDetector(const MatchOptions& options);
 
 // Empty when `image` is usable for matching (non-empty, 8-bit grey/BGR/BGRA, not blank),
@@ -79,6 +81,15 @@ std::string checkImage(const cv::Mat& image, const std::string& label, double mi
 // closer than `ratio` times the second nearest (an unambiguous match).
 std::vector<cv::DMatch> ratioTestMatches(const cv::DescriptorMatcher& matcher, const cv::Mat& query,
                                          const cv::Mat& train, double ratio);
+
+// Empty when `homography` (B into A) is one a camera can make, otherwise why not: its horizon
+// (where it sends points to infinity) crosses image B, it mirrors B, or over `matched_b` (the
+// matched keypoints of B, the overlap actually used) it squashes a direction more than the
+// descriptors that matched there tolerate (condition number of the local Jacobian). A strong
+// perspective, whose local scale differs many times from one side of B to the other, is
+// none of these.
+std::string homographyDefect(const cv::Matx33d& homography, const cv::Size& size_b,
+                             const std::vector<cv::Point2f>& matched_b);
 
 // Matches image B against image A (8-bit grey, BGR or BGRA): ratio-tested matches, a RANSAC
 // homography, and, with options.refine, its ECC refinement when that generalises: every

@@ -17,24 +17,6 @@ cv::Mat toGrey(const cv::Mat& image) {
   return grey;
 }
 
-// A homography that flips, collapses or explodes the image is a RANSAC accident, not a view
-// change a camera can make: the local scale must stay within 1/kMaxScale..kMaxScale.
-std::string checkConditioning(const cv::Matx33d& h, const cv::Size& size_b) {
-  constexpr double kMaxScale = 4.0;
-  for (const cv::Point2d& corner :
-       {cv::Point2d(0, 0), cv::Point2d(size_b.width, 0), cv::Point2d(size_b.width, size_b.height),
-        cv::Point2d(0, size_b.height)}) {
-    const double w = h(2, 0) * corner.x + h(2, 1) * corner.y + h(2, 2);
-    if (!(w > 1e-6)) return "the homography sends a corner of image B to infinity";
-    // Determinant of the Jacobian of the projective map at this corner.
-    const double jacobian = cv::determinant(h) / (w * w * w);
-    if (!(jacobian > 1.0 / (kMaxScale * kMaxScale) && jacobian < kMaxScale * kMaxScale)) {
-      return "the homography is degenerate (local area scale " + std::to_string(jacobian) + ")";
-    }
-  }
-  return "";
-}
-
 // Refines `h` (B into A) by maximising the enhanced correlation coefficient between A and B
 // warped into A's frame, over their overlap. Returns false (leaving `h` alone) when ECC fails or
 // would move a corner of B by more than `max_shift_px`: then the feature estimate stands.
@@ -149,22 +131,79 @@ void refineWhereHeldOutMatchesAgree(const cv::Mat& grey_a, const cv::Mat& grey_b
 }  // namespace
 
 cv::Ptr<cv::Feature2D> createDetector(const MatchOptions& options) {
-  if (options.detector == Detector::kSift) return cv::SIFT::create(options.max_features);
+  switch (options.detector) {
+    case Detector::kSift:
+      return cv::SIFT::create(options.max_features);
+    case Detector::kAkaze:
+      return cv::AKAZE::create();
+    case Detector::kOrb:
+      break;
+  }
   return cv::ORB::create(options.max_features);
 }
 
-bool parseDetector(const std::string& name, Detector& detector) {
-  if (name == "orb") {
-    detector = Detector::kOrb;
-  } else if (name == "sift") {
-    detector = Detector::kSift;
-  } else {
-    return false;
+std::string homographyDefect(const cv::Matx33d& homography, const cv::Size& size_b,
+                             const std::vector<cv::Point2f>& matched_b) {
+  // A homography is defined up to its sign: take the one with w > 0 at B's centre.
+  const cv::Point2d centre(size_b.width / 2.0, size_b.height / 2.0);
+  const double w_centre =
+      homography(2, 0) * centre.x + homography(2, 1) * centre.y + homography(2, 2);
+  const cv::Matx33d h = w_centre < 0.0 ? -homography : homography;
+  // w is linear in the pixel, so positive at B's four corners means positive over all of B.
+  for (const cv::Point2d& corner :
+       {cv::Point2d(0, 0), cv::Point2d(size_b.width, 0), cv::Point2d(size_b.width, size_b.height),
+        cv::Point2d(0, size_b.height)}) {
+    if (!(h(2, 0) * corner.x + h(2, 1) * corner.y + h(2, 2) > 0.0)) {
+      return "the homography is degenerate (its horizon crosses image B)";
+    }
   }
-  return true;
+  // With w > 0 the local Jacobian's determinant, det(h) / w^3, has the sign of det(h).
+  if (!(cv::determinant(h) > 0.0)) return "the homography is degenerate (it mirrors image B)";
+  // Descriptors match a patch only while its shape survives: SIFT, ORB and AKAZE fail beyond a
+  // foreshortening of about 3 (a 70 degree tilt). A fit that squashes a direction far more
+  // than that where its own matches are contradicts them. Vertices of the matched region's
+  // hull suffice: the squash grows towards the horizon, away from the region's inside.
+  constexpr double kMaxCondition = 10.0;
+  std::vector<cv::Point2f> hull;
+  if (matched_b.size() >= 3) cv::convexHull(matched_b, hull);
+  for (const cv::Point2f& p : hull) {
+    const double w = h(2, 0) * p.x + h(2, 1) * p.y + h(2, 2);
+    const cv::Point2d mapped = applyHomography(h, p);
+    const cv::Matx22d jacobian(
+        (h(0, 0) - mapped.x * h(2, 0)) / w, (h(0, 1) - mapped.x * h(2, 1)) / w,
+        (h(1, 0) - mapped.y * h(2, 0)) / w, (h(1, 1) - mapped.y * h(2, 1)) / w);
+    cv::Vec2d singular_values;
+    cv::SVD::compute(jacobian, singular_values, cv::SVD::NO_UV);
+    const double condition = singular_values[0] / singular_values[1];
+    if (!(condition <= kMaxCondition)) {
+      return "the homography is degenerate (it squashes the matched region " +
+             std::to_string(condition) + " times more in one direction than in the other)";
+    }
+  }
+  return "";
 }
 
-std::string detectorName(Detector detector) { return detector == Detector::kSift ? "sift" : "orb"; }
+bool parseDetector(const std::string& name, Detector& detector) {
+  for (const Detector known : {Detector::kOrb, Detector::kSift, Detector::kAkaze}) {
+    if (name == detectorName(known)) {
+      detector = known;
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string detectorName(Detector detector) {
+  switch (detector) {
+    case Detector::kSift:
+      return "sift";
+    case Detector::kAkaze:
+      return "akaze";
+    case Detector::kOrb:
+      break;
+  }
+  return "orb";
+}
 
 std::string validate(const MatchOptions& options) {
   if (options.max_features < 10) return "max_features must be >= 10";
@@ -230,6 +269,7 @@ PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& opti
     return result;
   }
 
+  // SIFT's descriptors are real vectors, ORB's and AKAZE's bit strings.
   const int norm = options.detector == Detector::kSift ? cv::NORM_L2 : cv::NORM_HAMMING;
   cv::BFMatcher matcher(norm);
   std::vector<cv::Point2f> points_a, points_b;
@@ -271,7 +311,7 @@ PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& opti
                    std::to_string(options.min_inliers) + "): the images do not seem to overlap";
     return result;
   }
-  result.error = checkConditioning(result.homography, b.size());
+  result.error = homographyDefect(result.homography, b.size(), inliers_b);
   return result;
 }
 

@@ -1,4 +1,4 @@
-// `rosrun image_converter stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift]
+// `rosrun image_converter stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift|akaze]
 // [--json] [--verbose]`: stitches overlapping images (left to right) into one panorama. Two
 // images are joined by their homography with a feathered seam, more through cv::Stitcher. With
 // --json, prints each consecutive pair's homography (row-major 3x3, mapping the second image
@@ -20,7 +20,7 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift] [--json]\n"
+    "usage: stitch A.png B.png [C.png ...] -o pano.png [--detector orb|sift|akaze] [--json]\n"
     "              [--verbose]\n\n"
     "Stitches overlapping images (left to right) into one panorama";
 
@@ -42,7 +42,7 @@ std::string parse(int argc, char** argv, Arguments& arguments, std::string& usag
   std::string detector = image_converter::detectorName(arguments.options.detector);
   options.add_options()("help,h", po::bool_switch(&arguments.help), "print this help and exit")(
       "output,o", po::value(&arguments.output)->value_name("FILE"), "panorama to write")(
-      "detector", po::value(&detector)->value_name("orb|sift")->default_value(detector),
+      "detector", po::value(&detector)->value_name("orb|sift|akaze")->default_value(detector),
       "feature detector")("json", po::bool_switch(&arguments.json),
                           "print each pair's homography, match and inlier counts, RMS "
                           "reprojection error and ECC verdict as JSON")(
@@ -66,7 +66,7 @@ std::string parse(int argc, char** argv, Arguments& arguments, std::string& usag
   }
   if (arguments.help) return "";
   if (!image_converter::parseDetector(detector, arguments.options.detector)) {
-    return "unknown detector '" + detector + "' (use orb or sift)";
+    return "unknown detector '" + detector + "' (use orb, sift or akaze)";
   }
   if (arguments.output.empty()) return "no output file (-o pano.png)";
   if (arguments.inputs.size() < 2) {
