@@ -57,6 +57,8 @@ constexpr std::size_t kMaxScoredPixels = 200;
 // the frame; a blue sweet's specular spot leaves 0.49).
 constexpr int kArcBins = 36;
 constexpr double kMinArcCoverage = 0.6;
+constexpr int kMinArcBins = kArcBins / 3;
+constexpr int kMinVisibleBins = kArcBins * 2 / 3;
 constexpr double kMinCircleFill = 0.4;
 // Touching balls of one colour (or a red and an orange sweet in red's hue window) make one blob.
 constexpr int kMaxBallsPerBlob = 4;
@@ -163,7 +165,8 @@ std::optional<CircleFit> ransacCircle(const std::vector<cv::Point2d>& arc, doubl
   return best;
 }
 
-// The share of `circle`'s arc inside the frame that `traced` pixels lie along.
+// The share of `circle`'s arc inside the frame that `traced` pixels lie along; 0 when they trace
+// less than kMinArcBins or the frame holds less than kMinVisibleBins of it.
 double arcCoverage(const CircleFit& circle, const std::vector<cv::Point2d>& traced,
                    cv::Size image) {
   std::array<bool, kArcBins> hit{};
@@ -180,7 +183,12 @@ double arcCoverage(const CircleFit& circle, const std::vector<cv::Point2d>& trac
     ++visible;
     covered += hit[bin];
   }
-  return visible > 0 ? static_cast<double>(covered) / visible : 0.0;
+  // A circle the frame's edge cuts much of is not judged from part of its arc (a box's corner
+  // at the edge traces one as well as a ball's outline does).
+  if (visible < kMinVisibleBins) return 0.0;
+  // A short arc (a box's corner cut by the frame's edge) establishes no ball.
+  if (covered < kMinArcBins) return 0.0;
+  return static_cast<double>(covered) / visible;
 }
 
 void drawDisk(cv::Mat& mask, const cv::Point2d& centre, double radius) {
@@ -468,6 +476,7 @@ void ColourBlobDetector::judge(const std::vector<cv::Point>& contour, const cv::
   // Not round as a whole: a ball with a shadow, a notch or a part hidden, touching balls, or no
   // ball. Each circle RANSAC finds is judged, then its boundary pixels are set aside.
   const cv::Rect contour_box = cv::boundingRect(contour);
+  std::vector<CircleFit> balls;
   for (int found = 0; found < kMaxBallsPerBlob; ++found) {
     // A ball smaller than min_area is none.
     const std::optional<CircleFit> ball =
@@ -481,6 +490,12 @@ void ColourBlobDetector::judge(const std::vector<cv::Point>& contour, const cv::
     std::vector<cv::Point2d> traced = inliersOf(arc, *ball, tolerance);
     if (arcCoverage(*ball, traced, image) < kMinArcCoverage) return;
     arc = std::move(rest);
+    // What is left of a ball's outline beside it fits small circles inside it: no balls.
+    const bool inside_another = std::any_of(balls.begin(), balls.end(), [&](const CircleFit& b) {
+      return cv::norm(b.centre - ball->centre) < std::max(b.radius, ball->radius);
+    });
+    balls.push_back(*ball);
+    if (inside_another) continue;
     // The blob cut to the circle (widened by the band).
     const double reach = ball->radius + limit;
     const cv::Rect disk_box(
