@@ -58,10 +58,10 @@ struct ColourBlobConfig {
   // Otherwise (a real ball's mask takes in its shadow, loses a notch to a seam or a highlight, or
   // another object hides part of it, balls touch) for each circle RANSAC finds that has
   // boundary pixels within the band along most of its arc (two thirds or more of it inside the
-  // frame) and is mostly filled by the blob; the blob is then cut to that circle. Boundary pixels
-  // on the image border are left out, so a ball cut by the frame's edge is judged by its arc;
-  // posters, boxes, tape, shadows and crescents are not round. 0: any shape, as the lab worksheet's
-  // colour steps and an approached box take it.
+  // frame) and is 40 % or more filled by the blob; the blob is then cut to that circle. Boundary
+  // pixels on the image border are left out, so a ball cut by the frame's edge is judged by its
+  // arc; posters, boxes, tape, shadows and crescents are not round. 0: any shape, as the lab
+  // worksheet's colour steps and an approached box take it.
   double roundness_tolerance = BeaconChaserDefaults::roundness_tolerance;
   // For balls of a known size resting on the floor: a contour counts only when the ball its
   // circle implies (floorBallRadius) has this radius within `tolerance` (a fraction of it).
