@@ -218,7 +218,9 @@ void bindColourBlobs(py::module_& m) {
       .def_readwrite("hue_centre", &ColourSpec::hue_centre)
       .def_readwrite("sensitivity", &ColourSpec::sensitivity)
       .def_readwrite("s_min", &ColourSpec::s_min)
-      .def_readwrite("v_min", &ColourSpec::v_min);
+      .def_readwrite("v_min", &ColourSpec::v_min)
+      .def_readwrite("median_hue_min", &ColourSpec::median_hue_min)
+      .def_readwrite("median_hue_max", &ColourSpec::median_hue_max);
   defKeywordInit(spec);
   m.def("parse_colour_name", &parseColourName, "name"_a,
         "The default ColourSpec of 'red', 'green' or 'blue'; None for other names.");
@@ -242,7 +244,7 @@ void bindColourBlobs(py::module_& m) {
         "The radius of the ball on the floor whose silhouette is this circle; None if none fits.");
 
   py::class_<ColourBlob> blob(m, "ColourBlob",
-                              "The largest blob of one colour; pixel centres at integers.");
+                              "The chosen blob of one colour; pixel centres at integers.");
   blob.def_readwrite("name", &ColourBlob::name)
       .def_readwrite("found", &ColourBlob::found)
       .def_readwrite("blob_count", &ColourBlob::blob_count)
@@ -283,7 +285,18 @@ void bindColourBlobs(py::module_& m) {
             b.contour.clear();
             for (const auto& [x, y] : points) b.contour.emplace_back(x, y);
           },
-          "Nx2 int32 array of (x, y), every boundary pixel");
+          "Nx2 int32 array of (x, y), every boundary pixel")
+      .def_property_readonly(
+          "circles",
+          [](const ColourBlob& b) {
+            py::array_t<float> out({static_cast<py::ssize_t>(b.circles.size()), py::ssize_t{3}});
+            for (size_t i = 0; i < b.circles.size(); ++i) {
+              for (int k = 0; k < 3; ++k) *out.mutable_data(i, k) = b.circles[i][k];
+            }
+            return out;
+          },
+          "Nx3 float32 array of (x, y, radius): every counted blob's circle, the chosen one's "
+          "first");
   defKeywordInit(blob);
 
   py::class_<BlobResult> result(m, "BlobResult");

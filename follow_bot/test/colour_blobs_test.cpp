@@ -202,7 +202,7 @@ TEST(ColourBlobDetector, SeesTwoColoursAtOnce) {
 
 TEST(ColourBlobDetector, RedIsFoundOnBothSidesOfTheHueWrap) {
   const ColourBlobDetector detector;
-  for (int hue : {0, 3, 10, 15, 165, 170, 176, 179}) {
+  for (int hue : {0, 3, 165, 170, 176, 179}) {
     cv::Mat frame = greyFrame();
     drawDisk(frame, {320.0, 240.0}, 30.0, bgrFromHsv(hue, 230, 220));
     const BlobResult result = detector.detect(frame);
@@ -210,7 +210,9 @@ TEST(ColourBlobDetector, RedIsFoundOnBothSidesOfTheHueWrap) {
     EXPECT_FALSE(blobOf(result, "green").found) << "hue " << hue;
     EXPECT_FALSE(blobOf(result, "blue").found) << "hue " << hue;
   }
-  for (int hue : {20, 30, 100, 140, 160}) {  // orange-yellow, cyan-ish, purple, magenta
+  // Orange (sweets 6..9: in red's hue window, their blobs' median is not red), orange-yellow,
+  // cyan-ish, purple, magenta.
+  for (int hue : {6, 9, 15, 20, 30, 100, 140, 160}) {
     cv::Mat frame = greyFrame();
     drawDisk(frame, {320.0, 240.0}, 30.0, bgrFromHsv(hue, 230, 220));
     EXPECT_FALSE(blobOf(detector.detect(frame), "red").found) << "hue " << hue;
@@ -413,6 +415,58 @@ TEST(ColourBlobDetector, OnlyRoundBlobsAreBeaconsAndTheFramesEdgeDoesNotCount) {
   EXPECT_EQ(blobOf(all, "green").blob_count, 2);
   EXPECT_NEAR(blobOf(all, "green").centroid.x, 430.0, 0.5);  // the poster is the larger
   EXPECT_TRUE(blobOf(all, "blue").found);
+}
+
+// Real balls: a shadow of the ball's own hue below it (dark carpet passes v_min), a white
+// highlight on its rim, a grey seam wider than the closing fills (from the rim, two thirds across:
+// a seam right across splits the ball into two half disks, which are not found), a grey box
+// hiding a third of it.
+// Each is found at its centre and wins over a smaller (farther) whole ball; a tape line and a
+// flat shadow-like blob alone are not balls.
+TEST(ColourBlobDetector, RealBallsWithShadowHighlightSeamOrOcclusionAreFoundAndTheNearestWins) {
+  const cv::Point2d centre(300.0, 220.0);
+  constexpr double kRadius = 60.0;
+  const auto spoil = [&](int kind, cv::Mat& frame) {
+    switch (kind) {
+      case 0:  // shadow: a flat dark-red ellipse under the ball
+        cv::ellipse(frame, cv::Point(300, 280), cv::Size(90, 22), 0.0, 0.0, 360.0,
+                    cv::Scalar(0, 0, 60), cv::FILLED);
+        break;
+      case 1:  // highlight on the rim
+        cv::circle(frame, cv::Point(262, 178), 18, cv::Scalar(250, 250, 250), cv::FILLED);
+        break;
+      case 2:  // seam
+        cv::line(frame, cv::Point(230, 150), cv::Point(330, 250), kFloorGrey, 7);
+        break;
+      case 3:  // occluded by a box
+        cv::rectangle(frame, cv::Rect(330, 100, 200, 250), kFloorGrey, cv::FILLED);
+        break;
+    }
+  };
+  const ColourBlobDetector detector;
+  for (int kind = 0; kind < 4; ++kind) {
+    cv::Mat frame = greyFrame();
+    drawDisk(frame, {520.0, 400.0}, 35.0, kPureRed, true);  // a farther whole ball
+    if (kind == 0) spoil(kind, frame);                      // the shadow lies behind the ball
+    drawDisk(frame, centre, kRadius, cv::Scalar(0, 0, 230), true);
+    if (kind != 0) spoil(kind, frame);
+    const ColourBlob red = blobOf(detector.detect(frame), "red");
+    ASSERT_TRUE(red.found) << "case " << kind;
+    ASSERT_GE(red.circles.size(), 1u);
+    EXPECT_NEAR(red.circles[0][0], centre.x, 2.0) << "case " << kind;
+    EXPECT_NEAR(red.circles[0][1], centre.y, 2.0) << "case " << kind;
+    EXPECT_NEAR(red.circles[0][2], kRadius, 2.5) << "case " << kind;
+    EXPECT_LT(cv::norm(cv::Point2f(red.circle_centre) - cv::Point2f(centre)), 8.0)
+        << "case " << kind << ": the reported blob is the near ball";
+  }
+
+  cv::Mat frame = greyFrame();
+  cv::rectangle(frame, cv::Rect(40, 300, 400, 20), kPureRed, cv::FILLED);  // tape
+  cv::ellipse(frame, cv::Point(400, 150), cv::Size(100, 18), 10.0, 0.0, 360.0, kPureBlue,
+              cv::FILLED);  // a flat blob, as a shadow's outline
+  const BlobResult result = detector.detect(frame);
+  EXPECT_FALSE(blobOf(result, "red").found);
+  EXPECT_FALSE(blobOf(result, "blue").found);
 }
 
 // The image circle of a ball of `radius` m resting on the floor `distance` m ahead of a level

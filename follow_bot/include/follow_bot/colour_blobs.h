@@ -1,6 +1,7 @@
-// Finds the largest blob of each of a few named colours (red, green, blue beacons) in a BGR
-// frame, as the lecture's Lab 5 does: HSV threshold, morphological clean-up, external contours,
-// the largest contour's moments, enclosing circle and bounding box.
+// Finds a blob of each of a few named colours (red, green, blue beacons) in a BGR frame, as the
+// lecture's Lab 5 does: HSV threshold, morphological clean-up, external contours, the chosen
+// contour's moments, enclosing circle and bounding box. Any shape: the largest blob wins; balls:
+// the nearest (largest circle) of the blobs that fit one.
 #pragma once
 
 #include <optional>
@@ -25,9 +26,16 @@ struct ColourSpec {
   // them. The floor V (20) keeps the shaded faces of the dark-green dumpster (V ~ 70).
   int s_min = BeaconChaserDefaults::s_min;  // 0..255
   int v_min = BeaconChaserDefaults::v_min;  // 0..255
+  // A blob counts only when the median hue of its pixels lies in [hue_centre + median_hue_min,
+  // hue_centre + median_hue_max] (-90..90, wrapping). An orange object's shaded side is as red as
+  // a red one (smarties: orange sweets' pixels span hue 0..17, their median 6..9), so red is told
+  // from orange by the whole blob, not pixel by pixel.
+  int median_hue_min = -90;
+  int median_hue_max = 90;
 };
 
-// The default spec of "red" (hue 0), "green" (60) or "blue" (120); nullopt for other names.
+// The default spec of "red" (hue 0, blobs with a median hue up to 3: orange things are not red),
+// "green" (60) or "blue" (120); nullopt for other names.
 std::optional<ColourSpec> parseColourName(const std::string& name);
 
 // Fills `specs` with the default specs of `names` (e.g. a ROS list parameter). Returns "" on
@@ -43,12 +51,16 @@ struct ColourBlobConfig {
   // Odd sizes keep the kernel centred, so neither step shifts a blob.
   int open_kernel = 3;
   int close_kernel = 5;
-  // A colour is found when its largest external contour encloses at least this many px^2.
+  // A colour is found when one of its external contours encloses at least this many px^2.
   double min_area = BeaconChaserDefaults::min_area;
-  // For balls: a contour counts only when its boundary's RMS distance to the circle that best
-  // fits it is at most 1 px (pixel quantisation) plus this fraction of that circle's radius.
-  // Boundary pixels on the image border are left out, so a ball cut by the frame's edge is
-  // judged by its arc; posters, boxes and crescents are not round. 0: any shape, as the lab
+  // For balls: a contour counts when its boundary's RMS distance to the circle that best fits it
+  // is at most the band, 1 px (pixel quantisation) plus this fraction of that circle's radius.
+  // Otherwise (a real ball's mask takes in its shadow, loses a notch to a seam or a highlight, or
+  // another object hides part of it, balls touch) for each circle RANSAC finds that has
+  // boundary pixels within the band along most of its arc (two thirds or more of it inside the
+  // frame) and is 40 % or more filled by the blob; the blob is then cut to that circle. Boundary
+  // pixels on the image border are left out, so a ball cut by the frame's edge is judged by its
+  // arc; posters, boxes, tape, shadows and crescents are not round. 0: any shape, as the lab
   // worksheet's colour steps and an approached box take it.
   double roundness_tolerance = BeaconChaserDefaults::roundness_tolerance;
   // For balls of a known size resting on the floor: a contour counts only when the ball its
@@ -90,19 +102,22 @@ std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Si
 std::optional<double> floorBallRadius(const CameraGeometry& camera, const cv::Point2d& centre,
                                       double radius_px);
 
-// The largest blob of one colour. All geometry is in full-image pixel coordinates with pixel
+// The chosen blob of one colour. All geometry is in full-image pixel coordinates with pixel
 // centres at integer positions (as cv::moments); every field but `name` is zero/empty unless
 // `found`.
 struct ColourBlob {
   std::string name;
   bool found = false;
   int blob_count = 0;         // contours of this colour with area >= min_area that pass the gates
-  double area = 0.0;          // px^2 enclosed by the largest contour (cv::contourArea)
+  double area = 0.0;          // px^2 enclosed by `contour` (cv::contourArea)
   cv::Point2d centroid;       // of the area enclosed by the contour (contour moments)
   cv::Point2f circle_centre;  // minimum enclosing circle of the contour
   float circle_radius = 0.0f;
   cv::Rect bounding_box;           // inclusive pixels, as cv::boundingRect
   std::vector<cv::Point> contour;  // every boundary pixel (CHAIN_APPROX_NONE)
+  // Every counted blob's circle (x, y, radius; a ball's fitted circle, else the enclosing one),
+  // the chosen blob's first.
+  std::vector<cv::Vec3f> circles;
 };
 
 struct BlobResult {
@@ -137,10 +152,15 @@ class ColourBlobDetector {
   static void drawDebug(cv::Mat& bgr, const BlobResult& blobs);
 
  private:
+  struct Candidate;
   void cleanedMask(const cv::Mat& hsv, const ColourSpec& spec, cv::Mat& mask) const;
-  // The roundness and floor-ball gates (ColourBlobConfig::roundness_tolerance, floor_ball);
-  // true when both are off or the shape cannot be judged.
-  bool beaconShaped(const std::vector<cv::Point>& contour, cv::Size image) const;
+  // Adds to `candidates` the blob of `contour` as the gates (roundness, floor ball, median hue)
+  // take it, or when it is not round as a whole, each ball RANSAC finds in it, cut to its circle.
+  void judge(const std::vector<cv::Point>& contour, const cv::Mat& hsv, const ColourSpec& spec,
+             std::vector<Candidate>& candidates) const;
+  // The floor-ball and median-hue gates on one blob's outline (`ball`: its circle, if judged).
+  bool acceptable(const std::optional<CircleFit>& ball, const std::vector<cv::Point>& contour,
+                  const cv::Mat& hsv, const ColourSpec& spec) const;
 
   ColourBlobConfig config_;
   cv::Mat open_kernel_;   // empty when opening is off

@@ -1,6 +1,8 @@
 #include "follow_bot/colour_blobs.h"
 
 #include <algorithm>
+#include <array>
+#include <climits>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -29,6 +31,8 @@ std::string checkSpec(const ColourSpec& spec) {
            requireInRange("sensitivity", spec.sensitivity, 0, 90),
            requireInRange("s_min", spec.s_min, 0, 255),
            requireInRange("v_min", spec.v_min, 0, 255),
+           requireInRange("median_hue_min", spec.median_hue_min, -90, spec.median_hue_max),
+           requireInRange("median_hue_max", spec.median_hue_max, spec.median_hue_min, 90),
        }) {
     if (!error.empty()) return error;
   }
@@ -40,13 +44,197 @@ cv::Mat ellipseKernel(int size) {
   return cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(size, size));
 }
 
+// Boundary pixels within this of a ball's circle, plus the roundness tolerance's fraction of its
+// radius, lie on it (pixel quantisation).
+constexpr double kQuantisationPx = 1.0;
+// RANSAC draws: with half the boundary on the ball, 100 draws all miss it with p ~ 2e-6.
+constexpr int kRansacDraws = 100;
+// A shape-judged contour is scored on at most this many of its pixels (evenly spread).
+constexpr std::size_t kMaxScoredPixels = 200;
+// A RANSAC circle is a ball's when its in-band boundary pixels trace this share of its arc inside
+// the frame (36 bins of 10 degrees; a ball with its shadow or 40 % hidden keeps ~0.6-0.75, the
+// circle inscribed in a square touches ~0.45), the blob fills this share of the circle (within
+// the frame; a blue sweet's specular spot leaves 0.49).
+constexpr int kArcBins = 36;
+constexpr double kMinArcCoverage = 0.6;
+constexpr int kMinArcBins = kArcBins / 3;
+constexpr int kMinVisibleBins = kArcBins * 2 / 3;
+constexpr double kMinCircleFill = 0.4;
+// Touching balls of one colour (or a red and an orange sweet in red's hue window) make one blob.
+constexpr int kMaxBallsPerBlob = 4;
+
+bool interior(const cv::Point2d& p, cv::Size image) {
+  return p.x > 0 && p.y > 0 && p.x < image.width - 1 && p.y < image.height - 1;
+}
+
+std::vector<cv::Point2d> interiorPixels(const std::vector<cv::Point>& contour, cv::Size image) {
+  std::vector<cv::Point2d> arc;
+  for (const cv::Point& p : contour) {
+    if (interior(p, image)) arc.push_back(p);
+  }
+  return arc;
+}
+
+// The least-squares circle (Kasa) through `arc`: x^2 + y^2 + D x + E y + F = 0, linear in
+// (D, E, F); rms_error over all of `arc`.
+std::optional<CircleFit> kasaFit(const std::vector<cv::Point2d>& arc) {
+  constexpr std::size_t kMinPoints = 5;
+  if (arc.size() < kMinPoints) return std::nullopt;
+  cv::Mat a(static_cast<int>(arc.size()), 3, CV_64F);
+  cv::Mat b(static_cast<int>(arc.size()), 1, CV_64F);
+  for (int i = 0; i < a.rows; ++i) {
+    const cv::Point2d& p = arc[i];
+    a.at<double>(i, 0) = p.x;
+    a.at<double>(i, 1) = p.y;
+    a.at<double>(i, 2) = 1.0;
+    b.at<double>(i) = -(p.x * p.x + p.y * p.y);
+  }
+  const cv::SVD svd(a);
+  // Rank < 3: the pixels lie on one line, which fits no circle.
+  if (svd.w.at<double>(2) <= 1e-9 * svd.w.at<double>(0)) return std::nullopt;
+  cv::Mat def;
+  svd.backSubst(b, def);
+  CircleFit fit;
+  fit.centre = {-def.at<double>(0) / 2.0, -def.at<double>(1) / 2.0};
+  const double radius_squared = fit.centre.dot(fit.centre) - def.at<double>(2);
+  if (!(radius_squared > 0.0) || !std::isfinite(radius_squared)) return std::nullopt;
+  fit.radius = std::sqrt(radius_squared);
+  double sum_squared = 0.0;
+  for (const cv::Point2d& p : arc) {
+    const double error = cv::norm(p - fit.centre) - fit.radius;
+    sum_squared += error * error;
+  }
+  fit.rms_error = std::sqrt(sum_squared / static_cast<double>(arc.size()));
+  return fit;
+}
+
+double band(double radius, double tolerance) { return kQuantisationPx + tolerance * radius; }
+
+std::vector<cv::Point2d> inliersOf(const std::vector<cv::Point2d>& arc, const CircleFit& circle,
+                                   double tolerance) {
+  const double limit = band(circle.radius, tolerance);
+  std::vector<cv::Point2d> inliers;
+  for (const cv::Point2d& p : arc) {
+    if (std::abs(cv::norm(p - circle.centre) - circle.radius) <= limit) inliers.push_back(p);
+  }
+  return inliers;
+}
+
+// The circle through three points; nullopt when they are (nearly) collinear.
+std::optional<CircleFit> circleThrough(const cv::Point2d& a, const cv::Point2d& b,
+                                       const cv::Point2d& c) {
+  const cv::Point2d ab = b - a, ac = c - a;
+  const double d = 2.0 * ab.cross(ac);
+  if (std::abs(d) < 1e-6) return std::nullopt;
+  const double ab2 = ab.dot(ab), ac2 = ac.dot(ac);
+  const cv::Point2d offset((ac.y * ab2 - ab.y * ac2) / d, (ab.x * ac2 - ac.x * ab2) / d);
+  CircleFit circle;
+  circle.centre = a + offset;
+  circle.radius = cv::norm(offset);
+  return circle;
+}
+
+// The circle of at least `min_radius` that the most of `arc` lies on within the band, per px of
+// band (the band widens with the radius, which would favour large circles through two blobs):
+// RANSAC over triples of its pixels (a fixed seed: the same frame gives the same answer), then
+// least squares on the inliers, twice.
+std::optional<CircleFit> ransacCircle(const std::vector<cv::Point2d>& arc, double tolerance,
+                                      double min_radius, cv::Size image) {
+  constexpr std::size_t kMinPoints = 5;
+  if (arc.size() < kMinPoints) return std::nullopt;
+  std::vector<cv::Point2d> scored;
+  const std::size_t stride = (arc.size() + kMaxScoredPixels - 1) / kMaxScoredPixels;
+  for (std::size_t i = 0; i < arc.size(); i += stride) scored.push_back(arc[i]);
+  const double max_radius = std::hypot(image.width, image.height);
+  cv::RNG random(0x5eed);
+  std::optional<CircleFit> best;
+  double best_score = 0.0;
+  const int n = static_cast<int>(scored.size());
+  for (int draw = 0; draw < kRansacDraws; ++draw) {
+    const std::optional<CircleFit> circle = circleThrough(
+        scored[random.uniform(0, n)], scored[random.uniform(0, n)], scored[random.uniform(0, n)]);
+    if (!circle || circle->radius < min_radius || circle->radius > max_radius) continue;
+    const double score = static_cast<double>(inliersOf(scored, *circle, tolerance).size()) /
+                         band(circle->radius, tolerance);
+    if (score > best_score) {
+      best_score = score;
+      best = circle;
+    }
+  }
+  for (int refit = 0; best && refit < 2; ++refit) best = kasaFit(inliersOf(arc, *best, tolerance));
+  return best;
+}
+
+// The share of `circle`'s arc inside the frame that `traced` pixels lie along; 0 when they trace
+// less than kMinArcBins or the frame holds less than kMinVisibleBins of it.
+double arcCoverage(const CircleFit& circle, const std::vector<cv::Point2d>& traced,
+                   cv::Size image) {
+  std::array<bool, kArcBins> hit{};
+  for (const cv::Point2d& p : traced) {
+    const double angle = std::atan2(p.y - circle.centre.y, p.x - circle.centre.x) + CV_PI;
+    hit[std::min(kArcBins - 1, static_cast<int>(angle / (2.0 * CV_PI) * kArcBins))] = true;
+  }
+  int visible = 0, covered = 0;
+  for (int bin = 0; bin < kArcBins; ++bin) {
+    const double angle = (bin + 0.5) * 2.0 * CV_PI / kArcBins - CV_PI;
+    const cv::Point2d p =
+        circle.centre + circle.radius * cv::Point2d(std::cos(angle), std::sin(angle));
+    if (!interior(p, image)) continue;
+    ++visible;
+    covered += hit[bin];
+  }
+  // A circle the frame's edge cuts much of is not judged from part of its arc (a box's corner
+  // at the edge traces one as well as a ball's outline does).
+  if (visible < kMinVisibleBins) return 0.0;
+  // A short arc (a box's corner cut by the frame's edge) establishes no ball.
+  if (covered < kMinArcBins) return 0.0;
+  return static_cast<double>(covered) / visible;
+}
+
+void drawDisk(cv::Mat& mask, const cv::Point2d& centre, double radius) {
+  constexpr int kShift = 4;  // sub-pixel centre and radius
+  constexpr double kScale = 1 << kShift;
+  cv::circle(mask, cv::Point(cvRound(centre.x * kScale), cvRound(centre.y * kScale)),
+             cvRound(radius * kScale), 255, cv::FILLED, cv::LINE_8, kShift);
+}
+
+// The median of the hues of `hsv`'s pixels under `mask`, as an offset from `centre` in -90..89.
+int medianHueOffset(const cv::Mat& hsv, const cv::Mat& mask, int centre) {
+  std::array<int, kHueCount> counts{};
+  int total = 0;
+  for (int r = 0; r < mask.rows; ++r) {
+    const uchar* inside = mask.ptr<uchar>(r);
+    const cv::Vec3b* pixel = hsv.ptr<cv::Vec3b>(r);
+    for (int c = 0; c < mask.cols; ++c) {
+      if (!inside[c]) continue;
+      ++counts[(pixel[c][0] - centre + kHueCount + kHueCount / 2) % kHueCount];
+      ++total;
+    }
+  }
+  int seen = 0;
+  for (int offset = 0; offset < kHueCount; ++offset) {
+    seen += counts[offset];
+    if (2 * seen >= total) return offset - kHueCount / 2;
+  }
+  return 0;
+}
+
 }  // namespace
+
+// A blob the gates let through: its pixels' outline and the circle it is ranked by.
+struct ColourBlobDetector::Candidate {
+  std::vector<cv::Point> contour;
+  cv::Vec3f circle;   // x, y, radius
+  double rank = 0.0;  // larger: nearer (a ball's radius) or larger (any shape: its area)
+};
 
 std::optional<ColourSpec> parseColourName(const std::string& name) {
   ColourSpec spec;
   spec.name = name;
   if (name == "red") {
     spec.hue_centre = 0;
+    // Smarties: red sweets' median hue is 0, orange ones' 6..9; the harness's orange clutter 16.
+    spec.median_hue_max = 3;
   } else if (name == "green") {
     spec.hue_centre = 60;
   } else if (name == "blue") {
@@ -105,39 +293,7 @@ std::string validate(const ColourBlobConfig& config) {
 }
 
 std::optional<CircleFit> fitCircle(const std::vector<cv::Point>& contour, cv::Size image) {
-  // x^2 + y^2 + D x + E y + F = 0 in the least-squares sense: linear in (D, E, F).
-  std::vector<cv::Point2d> arc;
-  for (const cv::Point& p : contour) {
-    if (p.x > 0 && p.y > 0 && p.x < image.width - 1 && p.y < image.height - 1) arc.push_back(p);
-  }
-  constexpr std::size_t kMinPoints = 5;
-  if (arc.size() < kMinPoints) return std::nullopt;
-  cv::Mat a(static_cast<int>(arc.size()), 3, CV_64F);
-  cv::Mat b(static_cast<int>(arc.size()), 1, CV_64F);
-  for (int i = 0; i < a.rows; ++i) {
-    const cv::Point2d& p = arc[i];
-    a.at<double>(i, 0) = p.x;
-    a.at<double>(i, 1) = p.y;
-    a.at<double>(i, 2) = 1.0;
-    b.at<double>(i) = -(p.x * p.x + p.y * p.y);
-  }
-  const cv::SVD svd(a);
-  // Rank < 3: the pixels lie on one line, which fits no circle.
-  if (svd.w.at<double>(2) <= 1e-9 * svd.w.at<double>(0)) return std::nullopt;
-  cv::Mat def;
-  svd.backSubst(b, def);
-  CircleFit fit;
-  fit.centre = {-def.at<double>(0) / 2.0, -def.at<double>(1) / 2.0};
-  const double radius_squared = fit.centre.dot(fit.centre) - def.at<double>(2);
-  if (!(radius_squared > 0.0) || !std::isfinite(radius_squared)) return std::nullopt;
-  fit.radius = std::sqrt(radius_squared);
-  double sum_squared = 0.0;
-  for (const cv::Point2d& p : arc) {
-    const double error = cv::norm(p - fit.centre) - fit.radius;
-    sum_squared += error * error;
-  }
-  fit.rms_error = std::sqrt(sum_squared / static_cast<double>(arc.size()));
-  return fit;
+  return kasaFit(interiorPixels(contour, image));
 }
 
 std::optional<double> floorBallRadius(const CameraGeometry& camera, const cv::Point2d& centre,
@@ -235,48 +391,133 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
     cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
 
     ColourBlob& blob = result.colours[i];
-    const std::vector<cv::Point>* largest = nullptr;
+    std::vector<Candidate> candidates;
     for (const std::vector<cv::Point>& contour : contours) {
-      const double area = cv::contourArea(contour);
-      if (area < config_.min_area || !beaconShaped(contour, bgr.size())) continue;
-      ++blob.blob_count;
-      if (largest == nullptr || area > blob.area) {
-        largest = &contour;
-        blob.area = area;
+      if (cv::contourArea(contour) >= config_.min_area) {
+        judge(contour, hsv, config_.colours[i], candidates);
       }
     }
-    if (largest == nullptr) continue;
+    if (candidates.empty()) continue;
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const Candidate& a, const Candidate& b) { return a.rank > b.rank; });
 
     blob.found = true;
+    blob.blob_count = static_cast<int>(candidates.size());
+    for (const Candidate& candidate : candidates) blob.circles.push_back(candidate.circle);
+    blob.contour = std::move(candidates.front().contour);
+    blob.area = cv::contourArea(blob.contour);
     // The same circle from the few hull vertices: on long straight runs of boundary pixels
     // minEnclosingCircle takes over 1 ms.
-    cv::convexHull(*largest, hull);
+    cv::convexHull(blob.contour, hull);
     cv::minEnclosingCircle(hull, blob.circle_centre, blob.circle_radius);
-    blob.bounding_box = cv::boundingRect(*largest);
-    const cv::Moments moments = cv::moments(*largest);
+    blob.bounding_box = cv::boundingRect(blob.contour);
+    const cv::Moments moments = cv::moments(blob.contour);
     // A zero-area contour (a line of pixels, only with min_area 0) has no moment centroid.
     blob.centroid = moments.m00 > 0.0
                         ? cv::Point2d(moments.m10 / moments.m00, moments.m01 / moments.m00)
                         : cv::Point2d(blob.circle_centre);
-    blob.contour = *largest;
   }
   return result;
 }
 
-bool ColourBlobDetector::beaconShaped(const std::vector<cv::Point>& contour, cv::Size image) const {
-  const bool round_gate = config_.roundness_tolerance > 0.0;
-  if (!round_gate && !config_.floor_ball) return true;
-  const std::optional<CircleFit> fit = fitCircle(contour, image);
-  if (!fit) return true;
-  constexpr double kQuantisationPx = 1.0;
-  if (round_gate && fit->rms_error > kQuantisationPx + config_.roundness_tolerance * fit->radius) {
-    return false;
+bool ColourBlobDetector::acceptable(const std::optional<CircleFit>& ball,
+                                    const std::vector<cv::Point>& contour, const cv::Mat& hsv,
+                                    const ColourSpec& spec) const {
+  if (ball && config_.floor_ball) {
+    const ColourBlobConfig::FloorBall& floor = *config_.floor_ball;
+    // Boundary pixel centres lie half a pixel inside the silhouette's edge.
+    const std::optional<double> radius =
+        floorBallRadius(floor.camera, ball->centre, ball->radius + 0.5);
+    if (!radius || std::abs(*radius - floor.radius_m) > floor.tolerance * floor.radius_m) {
+      return false;
+    }
   }
-  if (!config_.floor_ball) return true;
-  const ColourBlobConfig::FloorBall& ball = *config_.floor_ball;
-  // Boundary pixel centres lie half a pixel inside the silhouette's edge.
-  const std::optional<double> radius = floorBallRadius(ball.camera, fit->centre, fit->radius + 0.5);
-  return radius && std::abs(*radius - ball.radius_m) <= ball.tolerance * ball.radius_m;
+  if (spec.median_hue_min > -kHueCount / 2 || spec.median_hue_max < kHueCount / 2 - 1) {
+    const cv::Rect roi = cv::boundingRect(contour);
+    cv::Mat pixels = cv::Mat::zeros(roi.size(), CV_8UC1);
+    cv::drawContours(pixels, std::vector<std::vector<cv::Point>>{contour}, 0, 255, cv::FILLED,
+                     cv::LINE_8, cv::noArray(), INT_MAX, -roi.tl());
+    const int median = medianHueOffset(hsv(roi), pixels, spec.hue_centre);
+    if (median < spec.median_hue_min || median > spec.median_hue_max) return false;
+  }
+  return true;
+}
+
+void ColourBlobDetector::judge(const std::vector<cv::Point>& contour, const cv::Mat& hsv,
+                               const ColourSpec& spec, std::vector<Candidate>& candidates) const {
+  const cv::Size image = hsv.size();
+  const double tolerance = config_.roundness_tolerance;
+  const bool round_gate = tolerance > 0.0;
+  const auto add = [&](std::vector<cv::Point> outline, const std::optional<CircleFit>& ball) {
+    if (!acceptable(ball, outline, hsv, spec)) return;
+    Candidate candidate;
+    if (round_gate && ball) {
+      candidate.circle = {static_cast<float>(ball->centre.x), static_cast<float>(ball->centre.y),
+                          static_cast<float>(ball->radius + 0.5)};
+      candidate.rank = ball->radius;
+    } else {
+      cv::Point2f centre;
+      float radius = 0.0f;
+      cv::minEnclosingCircle(outline, centre, radius);
+      candidate.circle = {centre.x, centre.y, radius};
+      const double area = cv::contourArea(outline);
+      // Balls whose shape cannot be judged (cut by the frame all round) rank by an equal disk's.
+      candidate.rank = round_gate ? std::sqrt(area / CV_PI) : area;
+    }
+    candidate.contour = std::move(outline);
+    candidates.push_back(std::move(candidate));
+  };
+  if (!round_gate && !config_.floor_ball) return add(contour, std::nullopt);
+  std::vector<cv::Point2d> arc = interiorPixels(contour, image);
+  const std::optional<CircleFit> whole = kasaFit(arc);
+  if (!round_gate || !whole || whole->rms_error <= band(whole->radius, tolerance)) {
+    return add(contour, whole);
+  }
+  // Not round as a whole: a ball with a shadow, a notch or a part hidden, touching balls, or no
+  // ball. Each circle RANSAC finds is judged, then its boundary pixels are set aside.
+  const cv::Rect contour_box = cv::boundingRect(contour);
+  std::vector<CircleFit> balls;
+  for (int found = 0; found < kMaxBallsPerBlob; ++found) {
+    // A ball smaller than min_area is none.
+    const std::optional<CircleFit> ball =
+        ransacCircle(arc, tolerance, std::sqrt(config_.min_area / CV_PI), image);
+    if (!ball) return;
+    std::vector<cv::Point2d> rest;
+    const double limit = band(ball->radius, tolerance);
+    for (const cv::Point2d& p : arc) {
+      if (std::abs(cv::norm(p - ball->centre) - ball->radius) > limit) rest.push_back(p);
+    }
+    std::vector<cv::Point2d> traced = inliersOf(arc, *ball, tolerance);
+    if (arcCoverage(*ball, traced, image) < kMinArcCoverage) return;
+    arc = std::move(rest);
+    // What is left of a ball's outline beside it fits small circles inside it: no balls.
+    const bool inside_another = std::any_of(balls.begin(), balls.end(), [&](const CircleFit& b) {
+      return cv::norm(b.centre - ball->centre) < std::max(b.radius, ball->radius);
+    });
+    balls.push_back(*ball);
+    if (inside_another) continue;
+    // The blob cut to the circle (widened by the band).
+    const double reach = ball->radius + limit;
+    const cv::Rect disk_box(
+        cv::Point(cvFloor(ball->centre.x - reach), cvFloor(ball->centre.y - reach)),
+        cv::Point(cvCeil(ball->centre.x + reach) + 1, cvCeil(ball->centre.y + reach) + 1));
+    const cv::Rect roi = (contour_box | disk_box) & cv::Rect(cv::Point(), image);
+    cv::Mat pixels = cv::Mat::zeros(roi.size(), CV_8UC1);
+    cv::drawContours(pixels, std::vector<std::vector<cv::Point>>{contour}, 0, 255, cv::FILLED,
+                     cv::LINE_8, cv::noArray(), INT_MAX, -roi.tl());
+    cv::Mat disk = cv::Mat::zeros(roi.size(), CV_8UC1);
+    drawDisk(disk, ball->centre - cv::Point2d(roi.tl()), reach);
+    const int disk_px = cv::countNonZero(disk);
+    cv::bitwise_and(pixels, disk, pixels);
+    if (cv::countNonZero(pixels) < kMinCircleFill * disk_px) continue;
+    std::vector<std::vector<cv::Point>> parts;
+    cv::findContours(pixels, parts, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, roi.tl());
+    if (parts.empty()) continue;
+    std::vector<cv::Point>& largest = *std::max_element(
+        parts.begin(), parts.end(),
+        [](const auto& a, const auto& b) { return cv::contourArea(a) < cv::contourArea(b); });
+    if (cv::contourArea(largest) >= config_.min_area) add(std::move(largest), ball);
+  }
 }
 
 cv::Mat ColourBlobDetector::mask(const cv::Mat& bgr, const std::string& name) const {
