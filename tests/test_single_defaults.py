@@ -49,6 +49,7 @@ RENAMED = {
         "id": "ParkerDefaults::tag_id",
         "size_m": "ParkerDefaults::tag_size",
         "quad_decimate": "ParkerDefaults::quad_decimate",
+        "full_resolution_below": "ParkerDefaults::full_resolution_below",
         "min_decision_margin": "ParkerDefaults::min_decision_margin",
         "max_hamming": "ParkerDefaults::max_hamming",
     },

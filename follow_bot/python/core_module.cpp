@@ -432,6 +432,7 @@ void bindTagDetector(py::module_& m) {
       .def_readwrite("id", &TagDetectorConfig::id)
       .def_readwrite("size_m", &TagDetectorConfig::size_m)
       .def_readwrite("quad_decimate", &TagDetectorConfig::quad_decimate)
+      .def_readwrite("full_resolution_below", &TagDetectorConfig::full_resolution_below)
       .def_readwrite("min_decision_margin", &TagDetectorConfig::min_decision_margin)
       .def_readwrite("max_hamming", &TagDetectorConfig::max_hamming)
       .def_readwrite("ambiguity_ratio", &TagDetectorConfig::ambiguity_ratio)

@@ -49,6 +49,26 @@ const FamilyFactory* findFamily(const std::string& name) {
 // refine_edges' `+ 0.5`).
 constexpr double kApriltagPixelCentre = 0.5;
 
+// The pixels around a quad, with a margin of a quarter of its size: the white border apriltag
+// needs around the black square, and room for the corners to move when fitted again.
+cv::Rect2d patchAround(const std::vector<cv::Point2d>& corners) {
+  cv::Point2d low = corners.front(), high = corners.front();
+  for (const cv::Point2d& corner : corners) {
+    low = {std::min(low.x, corner.x), std::min(low.y, corner.y)};
+    high = {std::max(high.x, corner.x), std::max(high.y, corner.y)};
+  }
+  const double margin = 0.25 * std::max(high.x - low.x, high.y - low.y) + 2.0;
+  return {low - cv::Point2d(margin, margin), high + cv::Point2d(margin, margin)};
+}
+
+double shortestSide(const std::vector<cv::Point2d>& corners) {
+  double shortest = cv::norm(corners.back() - corners.front());
+  for (std::size_t i = 1; i < corners.size(); ++i) {
+    shortest = std::min(shortest, cv::norm(corners[i] - corners[i - 1]));
+  }
+  return shortest;
+}
+
 // Angle of the rotation taking a to b, radians.
 double rotationAngle(const cv::Matx33d& a, const cv::Matx33d& b) {
   const cv::Matx33d delta = a.t() * b;
@@ -123,6 +143,7 @@ std::string validate(const TagDetectorConfig& config) {
            requireInRange("id", config.id, 0, 1e6),
            requirePositive("size_m", config.size_m),
            requireInRange("quad_decimate", config.quad_decimate, 1.0, 8.0),
+           requireAtLeast("full_resolution_below", config.full_resolution_below, 0.0),
            requireInRange("min_decision_margin", config.min_decision_margin, 0.0, 255.0),
            requireInRange("max_hamming", config.max_hamming, 0, 3),
            requireAtLeast("ambiguity_ratio", config.ambiguity_ratio, 1.0),
@@ -159,7 +180,6 @@ TagDetector::TagDetector(const TagDetectorConfig& config)
   apriltag_detector_add_family_bits(impl_->detector, impl_->family, config.max_hamming);
   // ViSP's defaults, so the bench compares like with like: one thread, no blur, refined edges.
   impl_->detector->nthreads = 1;
-  impl_->detector->quad_decimate = static_cast<float>(config.quad_decimate);
   impl_->detector->quad_sigma = 0.0f;
   impl_->detector->refine_edges = true;
   impl_->detector->decode_sharpening = 0.25;
@@ -176,12 +196,14 @@ cv::Size quadSearchSize(cv::Size image, double quad_decimate) {
   return {1 + (image.width - 1) / factor, 1 + (image.height - 1) / factor};
 }
 
-std::optional<TagDetector::Quad> TagDetector::findQuad(const cv::Mat& gray) const {
-  const cv::Size searched = quadSearchSize(gray.size(), config_.quad_decimate);
+std::optional<TagDetector::Quad> TagDetector::findQuad(const cv::Mat& gray,
+                                                       double quad_decimate) const {
+  const cv::Size searched = quadSearchSize(gray.size(), quad_decimate);
   if (searched.height < kMinQuadSearchRows || searched.width < 1) return std::nullopt;
   // apriltag reads the pixels in place; it never writes to its input image.
   image_u8_t image{gray.cols, gray.rows, static_cast<int32_t>(gray.step[0]),
                    const_cast<uint8_t*>(gray.ptr<uint8_t>())};
+  impl_->detector->quad_decimate = static_cast<float>(quad_decimate);
   zarray_t* detections = apriltag_detector_detect(impl_->detector, &image);
   const apriltag_detection_t* best = nullptr;
   for (int i = 0; i < zarray_size(detections); ++i) {
@@ -208,18 +230,26 @@ std::optional<TagDetector::Quad> TagDetector::findQuad(const cv::Mat& gray) cons
   return quad;
 }
 
+std::optional<TagDetector::Quad> TagDetector::locateQuad(const cv::Mat& gray) const {
+  std::optional<Quad> quad = findQuad(gray, config_.quad_decimate);
+  if (config_.quad_decimate <= 1.0) return quad;
+  // The decimated search loses small and foreshortened tags (their cells fall below its pixels)
+  // and fits their corners coarsely: the frame is searched again at full resolution when nothing
+  // was found, and a small quad fitted again at full resolution on the patch around it.
+  if (!quad) return findQuad(gray, 1.0);
+  if (shortestSide(quad->corners) >= config_.full_resolution_below) return quad;
+  const cv::Rect patch =
+      cv::Rect(patchAround(quad->corners)) & cv::Rect(0, 0, gray.cols, gray.rows);
+  std::optional<Quad> refitted = findQuad(gray(patch), 1.0);
+  if (!refitted) return quad;
+  for (cv::Point2d& corner : refitted->corners) corner += cv::Point2d(patch.tl());
+  return refitted;
+}
+
 std::optional<std::vector<cv::Point2d>> TagDetector::refitRectified(
     const cv::Mat& raw, const CameraGeometry& camera, const std::vector<cv::Point2d>& corners) {
-  // The rectified camera's pixels around the quad, with a margin of a quarter of its size (the
-  // white border apriltag needs around the black square, and the corners' movement).
-  cv::Point2d low = corners.front(), high = corners.front();
-  for (const cv::Point2d& corner : corners) {
-    low = {std::min(low.x, corner.x), std::min(low.y, corner.y)};
-    high = {std::max(high.x, corner.x), std::max(high.y, corner.y)};
-  }
-  const double margin = kRefitMargin * std::max(high.x - low.x, high.y - low.y) + 2.0;
-  const cv::Rect2d patch_bounds(low - cv::Point2d(margin, margin),
-                                high + cv::Point2d(margin, margin));
+  // The rectified camera's pixels around the quad.
+  const cv::Rect2d patch_bounds = patchAround(corners);
   // A quad far larger than the frame or far outside it is no real tag (a lens that folds the
   // image over); its patch would cost more than the frame.
   const cv::Rect2d near_frame(-raw.cols, -raw.rows, 3.0 * raw.cols, 3.0 * raw.rows);
@@ -228,7 +258,7 @@ std::optional<std::vector<cv::Point2d>> TagDetector::refitRectified(
                             static_cast<int>(std::floor(patch_bounds.y)),
                             static_cast<int>(std::ceil(patch_bounds.width)),
                             static_cast<int>(std::ceil(patch_bounds.height)));
-  std::optional<Quad> quad = findQuad(patches_.patch(raw, camera, patch_rect));
+  std::optional<Quad> quad = locateQuad(patches_.patch(raw, camera, patch_rect));
   if (!quad) return std::nullopt;
   for (cv::Point2d& corner : quad->corners) corner += cv::Point2d(patch_rect.tl());
   return quad->corners;
@@ -237,7 +267,7 @@ std::optional<std::vector<cv::Point2d>> TagDetector::refitRectified(
 std::optional<MarkerObservation> TagDetector::detect(const cv::Mat& gray,
                                                      const CameraGeometry& camera) {
   if (gray.empty() || gray.type() != CV_8UC1 || !validate(camera).empty()) return std::nullopt;
-  std::optional<Quad> quad = findQuad(gray);
+  std::optional<Quad> quad = locateQuad(gray);
   if (!quad) return std::nullopt;
   // The pose is the rectified camera's: corners of a raw frame go through the lens first. A
   // barrel lens bows the tag's straight edges in the raw frame and apriltag fits straight lines

@@ -118,6 +118,7 @@ std::unique_ptr<MarkerDetector> makeMarkerDetector(const ParkerConfig& cfg) {
     config.id = cfg.tag_id;
     config.size_m = cfg.tag_size;
     config.quad_decimate = cfg.quad_decimate;
+    config.full_resolution_below = cfg.full_resolution_below;
     config.min_decision_margin = cfg.min_decision_margin;
     config.max_hamming = cfg.max_hamming;
     if (const std::string error = validate(config); !error.empty()) {
