@@ -1,8 +1,11 @@
 """Every command-line tool behaves as ROS users expect: --help prints the usage on stdout and
-exits 0 (starting nothing), bad usage exits 2 with the problem and the usage on stderr."""
+exits 0 (starting nothing), bad usage exits 2 with the problem and the usage on stderr. A node's
+--help also names its topics and the README that documents its parameters."""
 
 import os
+import re
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -18,7 +21,15 @@ TOOLS = {
     "image_converter core_reference": ["rosrun", "image_converter", "core_reference"],
     "sim": ["rosrun", "harness", "sim"],
     "run_scenario": ["rosrun", "harness", "run_scenario"],
+    "constant_twist": ["rosrun", "harness", "constant_twist"],
+    "image_stream_demo": ["rosrun", "harness", "image_stream_demo"],
+    "follower": ["rosrun", "follow_bot", "follower"],
+    "beacon_chaser": ["rosrun", "follow_bot", "beacon_chaser"],
+    "parker": ["rosrun", "follow_bot", "parker"],
+    "panorama": ["rosrun", "follow_bot", "panorama"],
+    "image_converter": ["rosrun", "image_converter", "image_converter"],
 }
+NODES = ["follower", "beacon_chaser", "parker", "panorama", "image_converter"]
 
 # No master listens here: a tool that tried to start ROS would hang until the timeout.
 NO_MASTER = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{free_port()}")
@@ -39,6 +50,9 @@ def run(args: list[str]) -> subprocess.CompletedProcess:
         ("image_converter core_reference", "--help"),
         ("sim", "--help"),
         ("run_scenario", "--help"),
+        ("constant_twist", "--help"),
+        ("image_stream_demo", "--help"),
+        *[(node, flag) for node in NODES for flag in ("--help", "-h")],
     ],
 )
 def test_help_prints_the_usage_and_exits_0(tool, flag):
@@ -46,6 +60,23 @@ def test_help_prints_the_usage_and_exits_0(tool, flag):
     assert result.returncode == 0, result.stderr
     assert result.stdout.startswith(f"usage: {tool.split()[-1]}"), result.stdout
     assert result.stderr == ""
+
+
+@pytest.mark.parametrize("node", NODES)
+def test_a_node_help_names_its_topics_and_its_manual(node):
+    help_text = run([*TOOLS[node], "--help"]).stdout
+    manual = re.search(r"^  (/\S+/README\.md), section (\S+)$", help_text, re.M)
+    assert manual, help_text
+    assert manual[2] == node
+    readme = Path(manual[1]).read_text()
+    heading = f"## {node} (node `{node}`"
+    assert heading in readme
+    # The README's section on the node (the truth the help is held to) names every topic.
+    section = readme.split(heading, 1)[1].split("\n## ", 1)[0]
+    topics = re.findall(r"^  (?:in|out|service) +(\S+)", help_text, re.M)
+    assert "camera/rgb/image_raw" in topics, help_text
+    undocumented = [t for t in topics if t != "/diagnostics" and f"`{t}`" not in section]
+    assert undocumented == [], help_text
 
 
 @pytest.mark.parametrize(

@@ -1,5 +1,6 @@
 """dynamic_reconfigure tells the truth: a rejected update leaves, and reports, the settings in
-force, and the next valid update is accepted. One round trip per node with a .cfg."""
+force, and the next valid update is accepted; a value out of its .cfg range is clamped with a
+warning naming the value asked and the value applied. One round trip per node with a .cfg."""
 
 import subprocess
 import time
@@ -35,6 +36,23 @@ def settings(env, node: str) -> dict:
     return reported
 
 
+def start(env, node: str, ros_name: str) -> subprocess.Popen:
+    """`rosrun follow_bot NODE` as `ros_name`, once its dynamic_reconfigure server is up."""
+    behaviour = subprocess.Popen(
+        ["rosrun", "follow_bot", node, f"__name:={ros_name[1:]}"],
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )  # fmt: skip
+    deadline = time.monotonic() + 30.0
+    while True:
+        listed = subprocess.run(["rosservice", "list"], env=env, capture_output=True, text=True)
+        if f"{ros_name}/set_parameters" in listed.stdout:
+            return behaviour
+        if time.monotonic() > deadline or behaviour.poll() is not None:
+            stop(behaviour)
+            raise AssertionError("node did not start: " + behaviour.stdout.read())
+        time.sleep(0.2)
+
+
 @pytest.mark.parametrize(
     ("node", "name", "bad", "valid"),
     [
@@ -47,20 +65,8 @@ def settings(env, node: str) -> dict:
 )
 def test_rejected_update_reports_the_settings_in_force(master_env, node, name, bad, valid):
     ros_name = f"/{node}_{name}"
-    behaviour = subprocess.Popen(
-        ["rosrun", "follow_bot", node, f"__name:={ros_name[1:]}"],
-        env=master_env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-    )  # fmt: skip
+    behaviour = start(master_env, node, ros_name)
     try:
-        deadline = time.monotonic() + 30.0
-        while True:
-            listed = subprocess.run(
-                ["rosservice", "list"], env=master_env, capture_output=True, text=True
-            ).stdout
-            if f"{ros_name}/set_parameters" in listed:
-                break
-            assert time.monotonic() < deadline and behaviour.poll() is None, "node did not start"
-            time.sleep(0.2)
         before = settings(master_env, ros_name)
 
         dynparam(master_env, "set", ros_name, yaml.safe_dump(bad))
@@ -72,3 +78,23 @@ def test_rejected_update_reports_the_settings_in_force(master_env, node, name, b
         stop(behaviour)
     log = behaviour.stdout.read()
     assert log.count("rejected reconfiguration, keeping the previous settings") == 1, log
+
+
+@pytest.mark.parametrize(
+    ("node", "name", "asked", "applied", "warning"),
+    [
+        # The tester's: the same kp at start-up is refused (test_node_params.py).
+        ("follower", "kp", 50, 20, "clamped ~kp: asked 50, applied 20 (must be in [0, 20])"),
+        ("beacon_chaser", "sensitivity", -3, 0, "~sensitivity: asked -3, applied 0 (must be in"),
+    ],
+)
+def test_a_clamped_update_is_warned(master_env, node, name, asked, applied, warning):
+    ros_name = f"/{node}_clamped_{name}"
+    behaviour = start(master_env, node, ros_name)
+    try:
+        dynparam(master_env, "set", ros_name, yaml.safe_dump({name: asked}))
+        assert settings(master_env, ros_name)[name] == applied
+    finally:
+        stop(behaviour)
+    log = behaviour.stdout.read()
+    assert log.count(warning) == 1, log

@@ -1,14 +1,15 @@
 """Absurd ~params are a clear start-up error (exit 1, the parameter named), never a crash.
 
 A value of the wrong type is never silently replaced by the default: the error names the ~param,
-the expected type and its range.
+the expected type and its range. A ~param the node does not have (a misspelt name) is warned
+about, with the nearest name it has; with ~strict_params it is a start-up error.
 """
 
 import subprocess
 
 import pytest
 
-from harness.node_under_test import private_master
+from harness.node_under_test import WatchedProcess, private_master
 from harness.run_scenario import stop
 
 
@@ -241,3 +242,83 @@ def test_a_nodelet_that_fails_to_load_in_a_manager_logs_why(master_env):
         "/params_follower cannot start: ~kp must be a finite number in [0, 20], "
         "got the string 'abc'" in log
     ), log
+
+
+# (node, a misspelt ~param, the name it should suggest). The tester's own misspellings first:
+# none is one typo from a name the node has, so nothing is suggested.
+MISSPELT = [
+    ("follow_bot follower", "band_top_fraction", None),
+    ("follow_bot beacon_chaser", "max_speed", None),
+    ("follow_bot panorama", "turn_rate", None),
+    ("follow_bot follower", "max_liner", "max_linear"),
+    ("follow_bot follower", "watchdog_timout", "watchdog_timeout"),  # CommandOutput's
+    ("follow_bot beacon_chaser", "turn_gian", "turn_gain"),
+    ("follow_bot beacon_chaser", "target_sise", "target_size"),  # read at start-up only
+    ("follow_bot parker", "tag_sise", "tag_size"),
+    ("follow_bot parker", "camera_heigth", "camera_height"),  # the mounting's
+    ("follow_bot panorama", "min_inlier", "min_inliers"),  # image_converter's Matching.cfg
+    ("image_converter image_converter", "circle_radus", "circle_radius"),
+]
+
+
+def unknown_warning(param: str, nearest: str | None) -> str:
+    suggestion = f"; did you mean ~{nearest}?" if nearest else ""
+    return f"~{param} is not a parameter of this node{suggestion}"
+
+
+@pytest.mark.parametrize(("node", "param", "nearest"), MISSPELT)
+def test_a_misspelt_parameter_is_warned_with_the_nearest_name(master_env, node, param, nearest):
+    args = ["rosrun", *node.split(), f"_{param}:=5", f"__name:=unknown_{param}"]
+    process = WatchedProcess(args, master_env)
+    try:
+        warned = process.wait_for(unknown_warning(param, nearest) + " (ignored)", 60.0)
+        running = process.process.poll() is None
+    finally:
+        stop(process.process)
+    assert warned and running, process.output()
+    assert "WARN" in process.output()
+
+
+@pytest.mark.parametrize(("node", "param", "nearest"), MISSPELT)
+def test_strict_params_makes_a_misspelt_parameter_a_startup_error(master_env, node, param, nearest):
+    result = subprocess.run(
+        ["rosrun", *node.split(), f"_{param}:=5", "_strict_params:=true",
+         f"__name:=strict_{param}"],
+        env=master_env, capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    out = result.stdout + result.stderr
+    assert result.returncode == 1, out
+    assert f"cannot start: {unknown_warning(param, nearest)} (~strict_params is true)" in out, out
+
+
+# Every documented ~param of each node (the README tables and follow_bot_common's), set at once:
+# none may be taken for unknown.
+COMMON = [
+    "_camera_mounting:=params", "_base_frame:=base_link", "_mounting_timeout:=5",
+    "_camera_height:=0.3", "_camera_pitch_deg:=20", "_camera_x_offset:=0",
+    "_image_rectified:=false", "_image_transport:=raw", "_diagnostic_period:=1",
+    "_limit_linear:=0.7", "_limit_angular:=3", "_limit_linear_accel:=1",
+    "_limit_angular_accel:=6", "_watchdog_timeout:=0.15", "_wall_watchdog_timeout:=0.15",
+    "_expected_frame_rate:=30",
+]  # fmt: skip
+KNOWN = {
+    "follow_bot follower": [*COMMON, "_use_odom:=false", "_kp:=1.5", "_mode:=pd"],
+    "follow_bot beacon_chaser": [*COMMON, "_target_shape:=box", "_target_size:=1.8"],
+    "follow_bot parker": [*COMMON, "_tag_size:=0.2", "_target:=apriltag"],
+    "follow_bot panorama": [*COMMON, "_detector:=orb", "_step_angle_deg:=20"],
+    "image_converter image_converter": ["_image_transport:=raw", "_circle_radius:=10"],
+}
+
+
+@pytest.mark.parametrize("node", KNOWN)
+def test_every_documented_parameter_is_known(master_env, node):
+    # _started_probe, the one unknown, says when the check is over (its warning).
+    name = f"known_{node.split()[1]}"
+    args = ["rosrun", *node.split(), *KNOWN[node], "_started_probe:=1", f"__name:={name}"]
+    process = WatchedProcess(args, master_env)
+    try:
+        checked = process.wait_for(unknown_warning("started_probe", None), 60.0)
+    finally:
+        stop(process.process)
+    warnings = [line for line in process.output().splitlines() if "is not a parameter" in line]
+    assert checked and len(warnings) == 1, process.output()

@@ -1,6 +1,7 @@
-"""Packaging: catkin_lint -W2 finds nothing, and every launch file documents its arguments
-(`roslaunch --ros-args` shows each one's doc=). roslaunch's file check runs in catkin's
-run_tests (roslaunch_add_file_check in each package's CMakeLists.txt)."""
+"""Packaging: catkin_lint -W2 finds nothing, every launch file documents its arguments
+(`roslaunch --ros-args` shows each one's doc=), and every dependency a package.xml names is a
+rosdep key (so `rosdep install --from-paths . --ignore-src` resolves it). roslaunch's file check
+runs in catkin's run_tests (roslaunch_add_file_check in each package's CMakeLists.txt)."""
 
 import subprocess
 import xml.etree.ElementTree as ET
@@ -10,6 +11,15 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 LAUNCH_FILES = sorted(p for p in REPO.glob("*/**/*.launch") if ".venv" not in p.parts)
+MANIFESTS = sorted(REPO.glob("*/package.xml"))
+# Where Debian installs the manifests of its ROS packages (ros-*, lib*-dev): /usr/share/<name>/.
+SYSTEM_MANIFESTS = Path("/usr/share")
+# System keys that no installed ROS package depends on, checked by hand: visp and apriltag are
+# rosdep keys (the library's Debian packages libvisp-dev and libapriltag-dev are not);
+# pybind11-dev and python3-dev are rosdep/base.yaml and python.yaml keys of ros/rosdistro.
+# The other system keys are ones a ROS package Debian ships depends on itself (cv_bridge on
+# libopencv-dev, boost, python3-numpy, ...): keys its rosdep resolves by construction.
+SYSTEM_KEYS = {"apriltag", "visp", "pybind11-dev", "python3-dev"}
 
 
 @pytest.mark.parametrize("path", LAUNCH_FILES, ids=lambda p: str(p.relative_to(REPO)))
@@ -31,3 +41,25 @@ def test_catkin_lint_is_clean():
     out = lint.stdout + lint.stderr
     assert lint.returncode == 0, out
     assert "checked 7 packages and found 0 problems" in out, out
+
+
+def dependencies(manifest: Path) -> set[str]:
+    root = ET.parse(manifest).getroot()
+    return {element.text.strip() for element in root if element.tag.endswith("depend")}
+
+
+def test_every_dependency_is_a_rosdep_key():
+    ours = {manifest.parent.name for manifest in MANIFESTS}
+    installed = {m.parent.name for m in SYSTEM_MANIFESTS.glob("*/package.xml")}
+    keys_of_installed = set().union(
+        *(dependencies(m) for m in SYSTEM_MANIFESTS.glob("*/package.xml"))
+    )
+    known = ours | installed | keys_of_installed | SYSTEM_KEYS
+    unknown = {
+        f"{manifest.parent.name}: {key}"
+        for manifest in MANIFESTS
+        for key in dependencies(manifest) - known
+    }
+    assert unknown == set()
+    # The names the tester's rosdep refused: Debian packages, not keys.
+    assert not any({"libvisp-dev", "libapriltag-dev"} & dependencies(m) for m in MANIFESTS)

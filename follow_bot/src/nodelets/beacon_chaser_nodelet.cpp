@@ -90,3 +90,13 @@ class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
 }  // namespace follow_bot
 
 FOLLOW_BOT_EXPORT_NODELET(BeaconChaserNodelet)
+
+follow_bot::NodeHelp follow_bot::beaconChaserHelp() {
+  return behaviourHelp(
+      "Chases coloured beacons: follows green and stops at red, or approaches one object to a "
+      "set range (~mode).",
+      {{"out", "~detections", "follow_bot/BeaconDetections",
+        "the blobs per colour, state, command"},
+       {"out", "~red_found", "std_msgs/Bool", "red in view (and ~green_found, ~blue_found)"},
+       {"out", "~debug_image", "sensor_msgs/Image", "lazy: contours, circles, labels"}});
+}

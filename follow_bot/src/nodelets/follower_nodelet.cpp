@@ -119,3 +119,11 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
 }  // namespace follow_bot
 
 FOLLOW_BOT_EXPORT_NODELET(FollowerNodelet)
+
+follow_bot::NodeHelp follow_bot::followerHelp() {
+  return behaviourHelp(
+      "Follows a coloured line on the floor (lecture, pd or path steering, ~mode).",
+      {{"in", "odom", "nav_msgs/Odometry", "only with ~use_odom"},
+       {"out", "~line", "follow_bot/LineStatus", "centroid, error, confidence, state, command"},
+       {"out", "~debug_image", "sensor_msgs/Image", "lazy: band, line pixels, centroid"}});
+}

@@ -111,3 +111,12 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
 }  // namespace follow_bot
 
 FOLLOW_BOT_EXPORT_NODELET(PanoramaNodelet)
+
+follow_bot::NodeHelp follow_bot::panoramaHelp() {
+  return behaviourHelp(
+      "Turns on the spot on request, photographing, and stitches the photographs into a "
+      "panorama.",
+      {{"in", "odom", "nav_msgs/Odometry", "the yaw the turn is measured by"},
+       {"service", "~capture", "std_srvs/Trigger", "one capture; replies when it is over"},
+       {"out", "~panorama", "sensor_msgs/Image", "latched, bgr8"}});
+}

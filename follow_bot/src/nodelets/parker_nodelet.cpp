@@ -99,3 +99,11 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
 }  // namespace follow_bot
 
 FOLLOW_BOT_EXPORT_NODELET(ParkerNodelet)
+
+follow_bot::NodeHelp follow_bot::parkerHelp() {
+  return behaviourHelp(
+      "Parks the robot square in front of an AprilTag or a textured sign (~target).",
+      {{"out", "~target_pose", "geometry_msgs/PoseStamped", "the marker in the camera frame"},
+       {"out", "~state", "std_msgs/String", "searching, approaching, aligning, parked or lost"},
+       {"out", "~debug_image", "sensor_msgs/Image", "lazy: outline, id, axes"}});
+}

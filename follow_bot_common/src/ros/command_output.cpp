@@ -43,6 +43,7 @@ CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool all
   // A queue: a lockstep simulator must see every frame's answer.
   status_pub_ = pnh.advertise<follow_bot_msgs::BehaviourStatus>("status", 10);
   enable_srv_ = pnh.advertiseService("enable", &CommandOutput::onEnable, this);
+  noteParamRead(pnh, "diagnostic_period");  // read by updater_
   updater_.setHardwareID("none");
   frame_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
       diagnostic_updater::FrequencyStatusParam(&expected_rate_, &expected_rate_, 0.2, 10),

@@ -10,9 +10,11 @@ from geometry_msgs.msg import Twist
 from sensor_msgs.msg import Image
 
 from follow_bot_msgs.msg import BehaviourStatus
+from harness.node_cli import parse_node_command_line
 
 
 def main() -> None:
+    parse_node_command_line(rospy.myargv()[1:], "constant_twist", __doc__)
     rospy.init_node("constant_twist")
     command = Twist()
     command.linear.x = float(rospy.get_param("~v", 0.2))

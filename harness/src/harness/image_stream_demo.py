@@ -12,6 +12,7 @@ import numpy as np
 import rospy
 from sensor_msgs.msg import Image
 
+from harness.node_cli import parse_node_command_line
 from harness.ros_image import bgr_to_msg, msg_to_bgr
 
 WIDTH, HEIGHT = 640, 480
@@ -30,6 +31,7 @@ def gradient_frame(k: int) -> np.ndarray:
 
 
 def main() -> None:
+    parse_node_command_line(rospy.myargv()[1:], "image_stream_demo", __doc__)
     rospy.init_node("image_stream_demo")
     out_dir = rospy.get_param("~out", "out")
     frames = int(rospy.get_param("~frames", 30))

@@ -9,6 +9,8 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import threading
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -46,3 +48,37 @@ def run_with_client(
             stop(process)
     assert done.returncode == 0, done.stdout + done.stderr
     return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+class WatchedProcess:
+    """A process whose output (stdout and stderr merged) is collected line by line while it runs,
+    so a test can wait for what it says."""
+
+    def __init__(self, args: list[str], env: dict[str, str]):
+        self.process = subprocess.Popen(
+            args, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+        )
+        self.lines: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.process.stdout:
+            self.lines.append(line)
+
+    def wait_for(self, text: str, timeout: float) -> bool:
+        """Whether a line with `text` arrives within `timeout` s (False at once if it exits)."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if any(text in line for line in self.lines):
+                return True
+            if not self._reader.is_alive():
+                return any(text in line for line in self.lines)
+            time.sleep(0.05)
+        return False
+
+    def output(self) -> str:
+        """Everything it said; after it has exited, all of it."""
+        if self.process.poll() is not None:
+            self._reader.join(5.0)
+        return "".join(self.lines)

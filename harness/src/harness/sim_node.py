@@ -28,7 +28,6 @@ the camera view; "" for the camera view alone), ~wait_for_behaviour (20 wall s).
 
 from __future__ import annotations
 
-import argparse
 import math
 import threading
 import time
@@ -46,6 +45,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from follow_bot_msgs.msg import BehaviourStatus
 from harness.debug_video import DebugView
+from harness.node_cli import parse_node_command_line
 from harness.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from harness.scenario import ScenarioError, load_scenario, scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
@@ -359,19 +359,9 @@ class SimNode:
         )
 
 
-def parse_command_line(argv: list[str]) -> None:
-    """--help describes the node; anything but ROS remappings and _param:= is a usage error."""
-    parser = argparse.ArgumentParser(
-        prog="sim",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="example: rosrun harness sim _world:=course _lockstep:=false",
-    )
-    parser.parse_args(argv)
-
-
 def main() -> None:
-    parse_command_line(rospy.myargv()[1:])  # before init_node: --help starts nothing
+    example = "example: rosrun harness sim _world:=course _lockstep:=false"
+    parse_node_command_line(rospy.myargv()[1:], "sim", __doc__, example)  # --help starts nothing
     rospy.init_node("sim")
     try:
         node = SimNode()

@@ -10,9 +10,13 @@
 #include <sensor_msgs/Image.h>
 
 #include "follow_bot_common/ros/checked_nodelet.h"
+#include "follow_bot_common/ros/node_help.h"
 #include "image_converter/overlay.h"
 
 namespace image_converter {
+
+// The image_converter node's --help: what it does, its topics.
+follow_bot::NodeHelp imageConverterHelp();
 
 class ImageConverterNodelet : public follow_bot::CheckedNodelet {
  public:

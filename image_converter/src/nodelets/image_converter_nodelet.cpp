@@ -123,6 +123,14 @@ void ImageConverterNodelet::handleImage(const sensor_msgs::ImageConstPtr& msg) {
   }
 }
 
+follow_bot::NodeHelp imageConverterHelp() {
+  return {"Draws a red circle at the centre of each camera frame (the lecture's ImageConverter).",
+          {{"in", follow_bot::topics::kImage, "sensor_msgs/Image",
+            "image_transport, queue 1, subscribed only while ~output is; ~image_transport picks "
+            "the transport"},
+           {"out", "~output", "sensor_msgs/Image", "annotated, bgr8, the input's header"}}};
+}
+
 }  // namespace image_converter
 
 PLUGINLIB_EXPORT_CLASS(image_converter::ImageConverterNodelet, nodelet::Nodelet)

@@ -1,4 +1,4 @@
-// The behaviour nodelets' factories, so the generated nodes (add_behaviour_node in
+// The behaviour nodelets' factories and --help, so the generated nodes (add_behaviour_node in
 // CMakeLists.txt) run them without pluginlib.
 #pragma once
 
@@ -7,12 +7,20 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "follow_bot_common/ros/node_help.h"
+
 namespace follow_bot {
 
 std::unique_ptr<nodelet::Nodelet> makeFollowerNodelet();
 std::unique_ptr<nodelet::Nodelet> makeBeaconChaserNodelet();
 std::unique_ptr<nodelet::Nodelet> makeParkerNodelet();
 std::unique_ptr<nodelet::Nodelet> makePanoramaNodelet();
+
+// What each node's --help says it does and which topics it has (with its nodelet's code).
+NodeHelp followerHelp();
+NodeHelp beaconChaserHelp();
+NodeHelp parkerHelp();
+NodeHelp panoramaHelp();
 
 }  // namespace follow_bot
 

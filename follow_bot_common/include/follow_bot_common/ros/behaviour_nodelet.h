@@ -7,6 +7,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <cv_bridge/cv_bridge.h>
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -23,11 +24,29 @@
 #include "follow_bot_common/ros/camera_mounting_source.h"
 #include "follow_bot_common/ros/checked_nodelet.h"
 #include "follow_bot_common/ros/command_output.h"
+#include "follow_bot_common/ros/node_help.h"
 #include "follow_bot_common/ros/params.h"
 #include "follow_bot_common/ros/topics.h"
 #include "follow_bot_common/status_report.h"
 
 namespace follow_bot {
+
+// A behaviour node's --help: `summary`, the topics every behaviour has (camera in, the
+// CommandOutput's), then its `own` (its debug image included, when it has one).
+inline NodeHelp behaviourHelp(const std::string& summary, const std::vector<TopicHelp>& own) {
+  NodeHelp help{
+      summary,
+      {{"in", topics::kImage, "sensor_msgs/Image",
+        "image_transport, queue 1; ~image_transport (e.g. compressed) picks the transport"},
+       {"in", topics::kCameraInfo, "sensor_msgs/CameraInfo", "the lens' intrinsics"},
+       {"out", "cmd_vel", "geometry_msgs/Twist",
+        "one per processed frame while it steers, limited; one zero when it stops"},
+       {"out", "~status", "follow_bot_msgs/BehaviourStatus", "one per processed frame"},
+       {"service", "~enable", "std_srvs/SetBool", "false: one zero Twist, then quiet"},
+       {"out", "/diagnostics", "diagnostic_msgs/DiagnosticArray", "frame rate, behaviour state"}}};
+  help.topics.insert(help.topics.end(), own.begin(), own.end());
+  return help;
+}
 
 // One accepted camera frame.
 struct Frame {
@@ -59,8 +78,10 @@ struct BehaviourOptions {
 //    (CameraMountingSource: ~camera_mounting tf|params, ~base_frame, ~mounting_timeout), then
 //    setup() and
 //    configure(); with live_reconfigure, a dynamic_reconfigure server whose updates go through
-//    the same configure(): a rejected update changes nothing and the server reports back the
-//    settings in force. Any start-up error names the ~param and fails the load (CheckedNodelet).
+//    the same configure(): a value outside its .cfg range is clamped with a warning naming it, a
+//    rejected update changes nothing and the server reports back the settings in force. Any
+//    start-up error names the ~param and fails the load; a ~param the node does not read is
+//    warned about (CheckedNodelet).
 //  * `camera/rgb/camera_info` (queue 1; names relative to the namespace, follow_bot_common/ros/
 //    topics.h): usable intrinsics go into camera() (updateIntrinsics: the rectified camera P
 //    and, unless ~image_rectified says the frames are image_rect, the lens K, D, R whose
@@ -126,6 +147,7 @@ class BehaviourNodelet : public CheckedNodelet {
   // before each accepted frame's step() and on updateDiagnostics().
   void addDiagnostics(const std::string& name, std::function<StatusReport()> report) {
     if (!diagnostics_) {
+      noteParamRead(getPrivateNodeHandle(), "diagnostic_period");  // read by the Updater
       diagnostics_ = std::make_unique<diagnostic_updater::Updater>(
           getNodeHandle(), getPrivateNodeHandle(), getPrivateNodeHandle().getNamespace());
       diagnostics_->setHardwareID("none");
@@ -175,8 +197,9 @@ class BehaviourNodelet : public CheckedNodelet {
     configure(applied_config_);
     output_ = std::make_unique<CommandOutput>(nh, pnh, options_.allow_reverse);
     if (options_.live_reconfigure) {
-      reconfigure_ = std::make_unique<dynamic_reconfigure::Server<Config>>(mutex_, pnh);
-      reconfigure_->setCallback([this](Config& config, uint32_t) { reconfigure(config); });
+      reconfigure_ = std::make_unique<dynamic_reconfigure::Server<Unclamped<Config>>>(mutex_, pnh);
+      reconfigure_->setCallback(
+          [this](Unclamped<Config>& config, uint32_t) { reconfigure(config); });
     }
     advertise(nh, pnh);
     if (options_.debug_image) {
@@ -190,13 +213,19 @@ class BehaviourNodelet : public CheckedNodelet {
     // it runs in a manager. The base name is resolved first so that a remapping of it also moves
     // the transport's topic (<base>/compressed): image_transport appends to the name as given.
     const image_transport::TransportHints hints("raw", ros::TransportHints(), pnh);
+    noteParamRead(pnh, "image_transport");  // read by TransportHints
     image_sub_ = image_transport::ImageTransport(nh).subscribe(
         nh.resolveName(topics::kImage), 1, &BehaviourNodelet::onImage, this, hints);
     image_topic_ = image_sub_.getTopic();
   }
 
-  // Called with mutex_ held by the dynamic_reconfigure server.
-  void reconfigure(Config& config) {
+  // Called with mutex_ held by the dynamic_reconfigure server, with the values asked for: those
+  // out of their .cfg range are clamped here, with a warning, rather than silently by the server.
+  void reconfigure(Unclamped<Config>& asked) {
+    for (const std::string& change : clampToRanges(asked)) {
+      NODELET_WARN("reconfiguration: clamped %s", change.c_str());
+    }
+    Config& config = asked;
     const std::string error =
         applyOrKeep(config, applied_config_, [this](const Config& c) { configure(c); });
     if (!error.empty()) {
@@ -337,7 +366,7 @@ class BehaviourNodelet : public CheckedNodelet {
   std::string image_topic_;
   // Declared first among the ROS handles: destroyed last, it sends the final stop.
   std::unique_ptr<CommandOutput> output_;
-  std::unique_ptr<dynamic_reconfigure::Server<Config>> reconfigure_;
+  std::unique_ptr<dynamic_reconfigure::Server<Unclamped<Config>>> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;  // the behaviour's own, if any
   image_transport::Publisher debug_pub_;
   ros::Subscriber camera_info_sub_;

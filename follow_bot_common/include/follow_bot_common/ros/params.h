@@ -1,22 +1,88 @@
 // Reading private parameters with their types and ranges checked: a value of the wrong type, a
 // non-finite number or one out of range is a start-up error naming the ~param, never a silent
-// default. Shared by every nodelet of the project.
+// default; a ~param the node never reads (a misspelt name) is named too (unknownParams). Shared
+// by every nodelet of the project.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include <ros/node_handle.h>
+#include <ros/param.h>
 #include <xmlrpcpp/XmlRpcValue.h>
 #include <boost/any.hpp>
 
 #include "follow_bot_common/ground_projection.h"
+#include "follow_bot_common/nearest_name.h"
 
 namespace follow_bot {
+
+namespace detail {
+// The ~params read so far, per private namespace (the nodelets of a manager share the process).
+struct ParamsRead {
+  std::mutex mutex;
+  std::map<std::string, std::set<std::string>> names;
+};
+inline ParamsRead& paramsRead() {
+  static ParamsRead read;
+  return read;
+}
+}  // namespace detail
+
+// Records that the node reads ~name, so unknownParams() knows it. param() records every read; a
+// library that reads a ~param itself (diagnostic_updater, image_transport) is named with this.
+inline void noteParamRead(const ros::NodeHandle& pnh, const std::string& name) {
+  detail::ParamsRead& read = detail::paramsRead();
+  std::lock_guard<std::mutex> lock(read.mutex);
+  read.names[pnh.getNamespace()].insert(name);
+}
+
+// A ~param set that the node does not read, and the name it reads that is one typo away.
+struct UnknownParam {
+  std::string name;                    // without the ~
+  std::optional<std::string> nearest;  // nearestName() among the names it reads
+  // "~name is not a parameter of this node[; did you mean ~nearest?]"
+  std::string describe() const {
+    return "~" + name + " is not a parameter of this node" +
+           (nearest ? "; did you mean ~" + *nearest + "?" : "");
+  }
+};
+
+// The ~params set under `pnh` that the node has not read (noteParamRead): names it does not
+// have, which would otherwise be silently ignored. Sub-namespaces are not judged: they hold the
+// settings of the plugins on the node's topics (~debug_image/compressed/...).
+inline std::vector<UnknownParam> unknownParams(const ros::NodeHandle& pnh) {
+  XmlRpc::XmlRpcValue set;
+  if (!ros::param::get(pnh.getNamespace(), set) ||
+      set.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+    return {};
+  }
+  std::vector<std::string> known;
+  {
+    detail::ParamsRead& read = detail::paramsRead();
+    std::lock_guard<std::mutex> lock(read.mutex);
+    const std::set<std::string>& names = read.names[pnh.getNamespace()];
+    known.assign(names.begin(), names.end());
+  }
+  std::vector<UnknownParam> unknown;
+  for (const auto& [name, value] : set) {
+    if (value.getType() != XmlRpc::XmlRpcValue::TypeStruct &&
+        !std::binary_search(known.begin(), known.end(), name)) {
+      unknown.push_back({name, nearestName(name, known)});
+    }
+  }
+  return unknown;
+}
 
 // "the string 'abc'", "the number 2.5", ...: what the user gave, for error messages.
 inline std::string describeValue(XmlRpc::XmlRpcValue& value) {
@@ -86,11 +152,13 @@ struct ParamType<std::string> {
   }
 };
 
-// `name` from `pnh`, or `fallback` when unset. Throws std::invalid_argument
+// `name` from `pnh`, or `fallback` when unset; recorded as read (noteParamRead). Throws
+// std::invalid_argument
 // "~name must be <type>[ <requirement>], got <value>" when the value has another type.
 template <typename T>
 T param(const ros::NodeHandle& pnh, const std::string& name, T fallback,
         const std::string& requirement = "") {
+  noteParamRead(pnh, name);
   XmlRpc::XmlRpcValue value;
   if (!pnh.getParam(name, value)) return fallback;
   T out = fallback;
@@ -174,6 +242,48 @@ ConfigT readConfig(const ros::NodeHandle& pnh) {
   ConfigT config = ConfigT::__getDefault__();
   config.__fromServer__(pnh);
   return config;
+}
+
+// A dynamic_reconfigure config whose server leaves the values asked for unclamped
+// (dynamic_reconfigure::Server<Unclamped<ConfigT>> calls this __clamp__), so that the callback
+// can say which ones it clamps (clampToRanges) instead of the server clamping them without a word.
+template <typename ConfigT>
+struct Unclamped : ConfigT {
+  Unclamped() = default;
+  Unclamped(const ConfigT& config) : ConfigT(config) {}  // NOLINT: the server converts the .cfg's
+  void __clamp__() {}
+};
+
+// Clamps `config` to the ranges of its .cfg, as dynamic_reconfigure would; returns what that
+// changed, one "~name: asked <value>, applied <value> (range)" per value.
+template <typename ConfigT>
+std::vector<std::string> clampToRanges(Unclamped<ConfigT>& config) {
+  ConfigT clamped = config;
+  clamped.__clamp__();
+  std::vector<std::string> changes;
+  const auto report = [&](const std::string& name, auto asked, auto applied, auto lo, auto hi) {
+    if (asked == applied) return;
+    std::ostringstream change;
+    change << "~" << name << ": asked " << asked << ", applied " << applied << " (must be "
+           << rangeText(lo, hi) << ")";
+    changes.push_back(change.str());
+  };
+  for (const auto& description : ConfigT::__getParamDescriptions__()) {
+    boost::any asked, applied, lo, hi;
+    description->getValue(config, asked);
+    description->getValue(clamped, applied);
+    description->getValue(ConfigT::__getMin__(), lo);
+    description->getValue(ConfigT::__getMax__(), hi);
+    if (description->type == "int") {
+      report(description->name, boost::any_cast<int>(asked), boost::any_cast<int>(applied),
+             boost::any_cast<int>(lo), boost::any_cast<int>(hi));
+    } else if (description->type == "double") {
+      report(description->name, boost::any_cast<double>(asked), boost::any_cast<double>(applied),
+             boost::any_cast<double>(lo), boost::any_cast<double>(hi));
+    }
+  }
+  static_cast<ConfigT&>(config) = clamped;
+  return changes;
 }
 
 // A dynamic_reconfigure callback's core: `apply(config)`, and on success `config` is the one in
