@@ -93,12 +93,5 @@ def test_poses_in_frame_order_and_some_answered(overload):
     assert r["answered"] >= 0.1 * r["sent"], r
 
 
-def test_sign_frames_cost_more_than_a_frame_period_so_stale_ones_are_dropped(overload):
-    key, r = overload
-    if key != "parker_sign":
-        pytest.skip("tag frames cost ~1 ms: the parker keeps up with 120 Hz")
-    assert r["answered"] < 0.8 * r["sent"], r
-
-
 if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
     client(sys.argv[2])

@@ -35,7 +35,7 @@ EDGE_TOLERANCE_PX = 14.0  # a cut sweet's circle is fitted to its visible arc on
 def photo(name: str) -> np.ndarray:
     path = DATA / name
     if not path.exists():
-        pytest.skip(f"{path} is missing: install Debian's opencv-doc")
+        pytest.fail(f"{path} is missing: install Debian's opencv-doc (tools/debian-packages.txt)")
     return cv2.imread(str(path))
 
 

@@ -105,7 +105,7 @@ def visp_reference():
     try:
         tokens = path.read_text().split()
     except FileNotFoundError:
-        pytest.skip(f"no {path} (Debian's visp-images-data)")
+        pytest.fail(f"no {path}: install Debian's visp-images-data (tools/debian-packages.txt)")
     return {
         int(tokens[i].rsplit("_", 1)[1]): np.array(tokens[i + 1 : i + 7], dtype=float)
         for i in range(0, len(tokens), 7)

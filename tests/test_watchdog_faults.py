@@ -289,12 +289,12 @@ def test_diagnostics_tell_why_the_robot_stopped(faults):
     assert "stopped by the watchdog" in wall_stop["message"], wall_stop
 
 
-def test_panorama_each_outage_ends_its_capture(faults):
+def test_each_outage_ends_a_running_capture(faults):
     key, r = faults
-    if not NODES[key].capturing:
-        pytest.skip("only the panorama runs a capture")
-    # Frames stop for 1.2 s, beyond ~frame_timeout (1 s): the call answers why, three times.
-    assert r["capture_replies"] == ["camera frames stopped during the capture"] * 3, r
+    # Frames stop for 1.2 s, beyond ~frame_timeout (1 s): a capturing panorama's call answers
+    # why, three times; the other behaviours run no capture and the client gets no reply.
+    expected = ["camera frames stopped during the capture"] * 3 if NODES[key].capturing else []
+    assert r["capture_replies"] == expected, r
 
 
 if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
