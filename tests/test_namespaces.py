@@ -26,9 +26,10 @@ CAMERA_IN = {"/robot1/camera/rgb/image_raw", "/robot1/camera/rgb/camera_info"}
 # (package, node executable, nodelet class, extra args, topics it must publish, subscribe).
 BEHAVIOURS = [
     ("follow_bot", "follower", "follow_bot/FollowerNodelet", [],
-     {"/robot1/cmd_vel", "/robot1/follower/status", "/robot1/follower/line"}, CAMERA_IN),
-    ("follow_bot", "follower", "follow_bot/FollowerNodelet", ["_use_odom:=true", "_mode:=path"],
-     {"/robot1/cmd_vel"}, CAMERA_IN | {"/robot1/odom"}),
+     {"/robot1/cmd_vel", "/robot1/follower/status", "/robot1/follower/line"},
+     CAMERA_IN | {"/robot1/odom"}),
+    ("follow_bot", "follower", "follow_bot/FollowerNodelet", ["_use_odom:=false", "_mode:=path"],
+     {"/robot1/cmd_vel"}, CAMERA_IN),
     ("follow_bot", "beacon_chaser", "follow_bot/BeaconChaserNodelet", [],
      {"/robot1/cmd_vel", "/robot1/beacon_chaser/status", "/robot1/beacon_chaser/detections"},
      CAMERA_IN),
@@ -75,7 +76,7 @@ def started(command: list[str], env: dict, ns: str = "") -> subprocess.Popen:
 @pytest.mark.parametrize(
     ("package", "executable", "nodelet", "args", "publishes", "subscribes"),
     BEHAVIOURS,
-    ids=[f"{b[1]}{'_odom' if b[3] else ''}" for b in BEHAVIOURS],
+    ids=[f"{b[1]}{'_without_odom' if b[3] else ''}" for b in BEHAVIOURS],
 )
 def test_node_and_nodelet_use_the_same_relative_names(
     master_env, package, executable, nodelet, args, publishes, subscribes

@@ -21,7 +21,9 @@ namespace follow_bot {
 class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
  private:
   void setup(ros::NodeHandle& nh, ros::NodeHandle& pnh, const FollowerConfig&) override {
-    use_odom_ = param(pnh, "use_odom", false);
+    // On by default: every real base publishes odom and lags its commands by 50-150 ms, which
+    // the commands alone cannot tell path mode's memory.
+    use_odom_ = param(pnh, "use_odom", true);
     if (use_odom_) {
       odom_sub_ = subscribe<nav_msgs::Odometry>(nh, "odom", [this](const nav_msgs::Odometry& odom) {
         odom_twist_ = Twist2D{odom.twist.twist.linear.x, odom.twist.twist.angular.z};
@@ -49,8 +51,15 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   // the base lags or slips.
   Twist2D steer(const LineMeasurement& seen, double stamp) {
     if (law_->mode() == SteeringMode::kPath && use_odom_ && !has_odom_) {
-      NODELET_WARN_THROTTLE(5.0, "~use_odom: no odometry on %s yet, using the commands sent",
-                            odom_sub_.getTopic().c_str());
+      // Said once, after a second of frames: odometry may well start after the camera.
+      if (!first_path_stamp_) first_path_stamp_ = stamp;
+      if (!odom_absence_said_ && stamp - *first_path_stamp_ >= 1.0) {
+        odom_absence_said_ = true;
+        NODELET_WARN(
+            "~use_odom: no odometry on %s after 1 s of frames; path mode carries the line by the "
+            "commands sent until it arrives (~use_odom:=false says that is intended)",
+            odom_sub_.getTopic().c_str());
+      }
     }
     if (law_->mode() != settings_.steering.mode) {
       NODELET_WARN_THROTTLE(5.0, "path mode: no valid camera_info on %s yet, steering with pd",
@@ -109,7 +118,9 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   LineMeasurement seen_;  // the last frame's
   bool placement_reported_ = false;
   Twist2D last_command_;  // what the robot was told to do since the previous frame
-  bool use_odom_ = false;
+  bool use_odom_ = true;
+  std::optional<double> first_path_stamp_;
+  bool odom_absence_said_ = false;
   bool has_odom_ = false;
   Twist2D odom_twist_;
   ros::Subscriber odom_sub_;
@@ -123,7 +134,7 @@ FOLLOW_BOT_EXPORT_NODELET(FollowerNodelet)
 follow_bot::NodeHelp follow_bot::followerHelp() {
   return behaviourHelp(
       "Follows a coloured line on the floor (lecture, pd or path steering, ~mode).",
-      {{"in", "odom", "nav_msgs/Odometry", "only with ~use_odom"},
+      {{"in", "odom", "nav_msgs/Odometry", "with ~use_odom (the default)"},
        {"out", "~line", "follow_bot/LineStatus", "centroid, error, confidence, state, command"},
        {"out", "~debug_image", "sensor_msgs/Image", "lazy: band, line pixels, centroid"}});
 }

@@ -180,8 +180,10 @@ class SimNode:
                     "camera/rgb/image_raw/compressed", CompressedImage, queue_size=None
                 )
             self.info_pub = rospy.Publisher("camera/rgb/camera_info", CameraInfo, queue_size=None)
-        self.pose_pub = rospy.Publisher("~pose", Odometry, queue_size=1)
-        self.odom_pub = rospy.Publisher("odom", Odometry, queue_size=1)
+            # Odometry too: a behaviour that steers by it (the follower's default) must have this
+            # step's before this step's frame, or lockstep runs would not repeat.
+            self.pose_pub = rospy.Publisher("~pose", Odometry, queue_size=None)
+            self.odom_pub = rospy.Publisher("odom", Odometry, queue_size=None)
         self.tf = tf2_ros.TransformBroadcaster()
         self.cmd_sub = rospy.Subscriber("cmd_vel", Twist, self.inbox.put_command, queue_size=10)
         self.status_topic = rospy.get_param("~status", "")
