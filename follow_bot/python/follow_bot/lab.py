@@ -87,10 +87,13 @@ class CommandOutput:
         self.limiter = core.VelocityLimiter(core.VelocityLimiterConfig(allow_reverse=allow_reverse))
         timeout = rospy.get_param("~watchdog_timeout", core.WATCHDOG_TIMEOUT)
         rate = rospy.get_param("~expected_frame_rate", core.EXPECTED_FRAME_RATE)
+        if not rate >= 0.0:
+            rospy.logfatal(f"~expected_frame_rate must be >= 0 (0: unknown), got {rate}")
+            sys.exit(2)
         try:
             self.watchdog = core.FrameWatchdog(timeout, 1.0 / rate if rate else 0.0)
         except ValueError as error:
-            rospy.logfatal(f"~watchdog_timeout, ~expected_frame_rate: {error}")
+            rospy.logfatal(f"~watchdog_timeout: {error}")
             sys.exit(2)
         self.cmd_vel = rospy.Publisher("cmd_vel", Twist, queue_size=1)
         self.status = rospy.Publisher("~status", BehaviourStatus, queue_size=10)
