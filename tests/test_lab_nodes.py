@@ -210,6 +210,8 @@ def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown():
         ("line_follower", "_kp:=-1", "kp must be >= 0, got -1"),
         ("line_follower", "_mode:=fast", "mode: unknown value 'fast'"),
         ("follow_green_stop_red", "_close_area:=-1.0", "close_area must be >= 0, got -1"),
+        ("line_follower", "_expected_frame_rate:=-5.0",
+         "~expected_frame_rate must be >= 0 (0: unknown), got -5.0"),
         ("colour_filter", "_colour:=purple", "~colour must be red, green or blue, got 'purple'"),
         ("three_colours", "_sensitivity:=95",
          "invalid parameter: colours[0] (red): sensitivity must be in [0, 90], got 95"),

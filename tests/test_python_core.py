@@ -435,6 +435,13 @@ def test_frame_watchdog_as_the_gtests():
     for bad in (0.0, -1.0, math.nan, math.inf):
         with pytest.raises(ValueError, match="timeout must be finite and > 0"):
             core.FrameWatchdog(bad)
+    # A 5 Hz camera: 3 frame periods, its expected one until measured.
+    slow = core.FrameWatchdog(core.WATCHDOG_TIMEOUT, expected_period_s=0.2)
+    assert slow.timeout == pytest.approx(0.6) and slow.min_timeout == core.WATCHDOG_TIMEOUT
+    for t in (1.0, 1.2, 1.4):
+        slow.frame_arrived(t)
+    assert slow.frame_interval == pytest.approx(0.2) and not slow.expired(1.95)
+    assert slow.expired(2.05) and core.EXPECTED_FRAME_RATE == 0.0
 
 
 def blob(name, centroid_x, area):

@@ -3,7 +3,11 @@
 - frames stop while /clock runs: one zero Twist within 0.2 s, nothing after;
 - /clock jumps back 100 s: the node keeps answering, and the watchdog still stops it;
 - /clock and frames stop together (the simulator died): one zero Twist within 0.3 s of wall
-  time (the steady-clock watchdog), nothing after.
+  time (the steady-clock watchdog), nothing after;
+- a 5 Hz camera (frames every 6th tick, no ~expected_frame_rate): once the watchdog has measured
+  the rate no zero Twist between frames, the rate reported OK, and one zero within 3 frame
+  periods when frames stop;
+- frames stop while the node is disabled: no zero Twist, /diagnostics says so, no ERROR.
 
 A frame is answered by the node's ~status (stamped with the frame's stamp) and, when that says a
 command was sent, by its Twist. The panorama steers only while capturing: the client keeps a
@@ -38,6 +42,7 @@ from harness.fuzz import (
 from harness.node_under_test import run_with_client
 
 RATE_HZ = 30.0
+SLOW_FRAME_TICKS = 6  # a frame every 6th tick: a 5 Hz camera
 BEHAVIOURS = [
     "follower", "beacon_follow", "beacon_approach", "parker_tag", "parker_sign",
     "panorama_capturing",
@@ -51,7 +56,7 @@ def client(key: str) -> None:
     from nav_msgs.msg import Odometry
     from rosgraph_msgs.msg import Clock
     from sensor_msgs.msg import CameraInfo, Image
-    from std_srvs.srv import Trigger
+    from std_srvs.srv import SetBool, Trigger
 
     from follow_bot_msgs.msg import BehaviourStatus
 
@@ -62,14 +67,18 @@ def client(key: str) -> None:
     image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=1, tcp_nodelay=True)
     info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1)
     statuses: list[dict] = []  # this node's "behaviour" diagnostics, as key -> value
-    rospy.Subscriber(
-        "/diagnostics", DiagnosticArray,
-        lambda a: statuses.extend(
-            {"level": int.from_bytes(s.level, "little") if isinstance(s.level, bytes) else s.level,
-             "message": s.message, **{kv.key: kv.value for kv in s.values}}
-            for s in a.status if s.name.endswith(": behaviour")
-        ),
-    )  # fmt: skip
+    rate_statuses: list[dict] = []  # its "frame rate" ones
+
+    def on_diagnostics(array) -> None:
+        for s in array.status:
+            level = int.from_bytes(s.level, "little") if isinstance(s.level, bytes) else s.level
+            status = {"level": level, "message": s.message, **{kv.key: kv.value for kv in s.values}}
+            if s.name.endswith(": behaviour"):
+                statuses.append(status)
+            elif s.name.endswith(": frame rate"):
+                rate_statuses.append(status)
+
+    rospy.Subscriber("/diagnostics", DiagnosticArray, on_diagnostics)
     sim_time = [1000.0]  # the next /clock value
     published = [0.0]  # the last /clock value sent: a Twist's arrival time on the sim clock
     last_frame = {"wall": 0.0, "sim": 0.0}
@@ -227,7 +236,41 @@ def client(key: str) -> None:
     result["diagnostics_last"] = statuses[-1] if statuses else None
     wall_stops = [s for s in statuses if s.get("last watchdog stop clock") == "wall"]
     result["diagnostics_wall_stop"] = wall_stops[0] if wall_stops else None
-    result["capture_replies"] = capture_replies
+    result["capture_replies"] = list(capture_replies)  # the outages above
+
+    def run_slow(seconds: float) -> list:
+        """A 5 Hz camera on the 30 Hz clock for `seconds` of sim time; the Twists in it."""
+        start = len(twists)
+        counts.update(frames=0, answers=0, commands=0)
+        for k in range(round(seconds * RATE_HZ)):
+            frame = k % SLOW_FRAME_TICKS == 0
+            answer = tick(frame)
+            counts["frames"] += frame
+            counts["answers"] += answer is not None
+            counts["commands"] += answer is not None and answer.command_sent
+        return twists[start:]
+
+    if not spec.capturing:  # the panorama steers only within a capture
+        run_slow(2.0)  # the rate changes from 30 Hz: the watchdog measures the new one
+        reports = len(rate_statuses)
+        slow = run_slow(3.0)
+        result["slow_camera"] = {
+            **counts,
+            "twists": len(slow),
+            "zeros": sum(1 for _, _, v, w in slow if v == 0.0 and w == 0.0),
+            "rate_statuses": rate_statuses[reports:],
+        }
+        result["slow_camera_stop"] = outage(clock=True)
+
+    # Disabled (idle: cmd_vel quiet), then the frames stop: nothing to stop, and no ERROR.
+    rospy.ServiceProxy(f"{node}/enable", SetBool)(False)
+    run(0.5, frames=True)
+    reports, rate_reports = len(statuses), len(rate_statuses)
+    _, during = run(2.5, frames=False)
+    result["idle_outage"] = {
+        "twists": len(during),
+        "statuses": statuses[reports:] + rate_statuses[rate_reports:],
+    }
     print(json.dumps(result))
 
 
@@ -287,6 +330,38 @@ def test_diagnostics_tell_why_the_robot_stopped(faults):
     # The report forced at the /clock-and-frames outage: an error naming the wall clock.
     assert wall_stop is not None and wall_stop["level"] == 2, wall_stop
     assert "stopped by the watchdog" in wall_stop["message"], wall_stop
+
+
+# The panorama steers only within a capture: the client plays the slow camera to the others.
+# (BEHAVIOURS' order, so each shares the module's run of its node.)
+STEERING = [key for key in BEHAVIOURS if not NODES[key].capturing]
+
+
+@pytest.mark.parametrize("faults", STEERING, indirect=True)
+def test_slow_camera_drives_without_watchdog_stops_and_still_stops_when_frames_end(faults):
+    key, r = faults
+    o = r["slow_camera"]
+    assert o["frames"] == 15 and o["answers"] == o["frames"] == o["commands"], o
+    assert o["twists"] == o["frames"] and o["zeros"] == 0, o
+    rates = o["rate_statuses"]
+    assert rates and all(s["level"] == 0 and s["message"] == "5.0 Hz" for s in rates), rates
+    assert rates[-1]["expected rate (Hz)"] == "unknown", rates
+    assert abs(float(rates[-1]["watchdog timeout (s)"]) - 0.6) < 1e-3, rates
+    stop = r["slow_camera_stop"]
+    assert stop["zeros"] == 1 and stop["twists"] == 1, stop
+    # 3 periods of 0.2 s; then at most a check period (0.15 s / 4), one more for the frame
+    # handled before a check, and a clock tick.
+    assert 0.6 - 1e-6 <= stop["stop_after_s"] <= 0.6 + 2 * 0.0375 + 1 / 30 + 1e-6, stop
+
+
+def test_frames_stopping_while_disabled_is_reported_but_no_error(faults):
+    key, r = faults
+    o = r["idle_outage"]
+    assert o["twists"] == 0, o
+    assert o["statuses"] and all(s["level"] < 2 for s in o["statuses"]), o
+    idle = [s for s in o["statuses"] if s["level"] == 1 and "no frames, idle" in s["message"]]
+    assert len(idle) >= 2, o  # the behaviour and the frame rate say why
+    assert not any("none time" in s["message"] for s in o["statuses"]), o
 
 
 def test_each_outage_ends_a_running_capture(faults):

@@ -79,17 +79,23 @@ void bindVelocity(py::module_& m) {
 void bindWatchdog(py::module_& m) {
   py::class_<FrameWatchdog>(m, "FrameWatchdog",
                             "Tracks frame arrival times (seconds, one clock) to detect a stalled "
-                            "camera.")
-      .def(py::init<double>(), "timeout_s"_a)
+                            "camera; the timeout follows the camera's measured rate "
+                            "(3 frame intervals), never below timeout_s.")
+      .def(py::init<double, double>(), "timeout_s"_a, "expected_period_s"_a = 0.0)
       .def("frame_arrived", &FrameWatchdog::frameArrived, "t"_a)
+      .def("alive_at", &FrameWatchdog::aliveAt, "t"_a)
       .def("expired", &FrameWatchdog::expired, "now"_a)
       .def("should_send_stop", &FrameWatchdog::shouldSendStop, "now"_a,
            "True exactly once per outage.")
       .def("reset", &FrameWatchdog::reset)
       .def_property_readonly("timeout", &FrameWatchdog::timeout)
+      .def_property_readonly("min_timeout", &FrameWatchdog::minTimeout)
+      .def_property_readonly("frame_interval", &FrameWatchdog::frameInterval)
       .def_property_readonly("last_frame", &FrameWatchdog::lastFrame);
   // CommandOutput's ~watchdog_timeout default (follow_bot_common/cfg/CommandOutput.cfg), s.
   m.attr("WATCHDOG_TIMEOUT") = follow_bot_common::CommandOutputDefaults::watchdog_timeout;
+  // Its ~expected_frame_rate default, Hz (0: unknown).
+  m.attr("EXPECTED_FRAME_RATE") = follow_bot_common::CommandOutputDefaults::expected_frame_rate;
 }
 
 void bindLineDetector(py::module_& m) {

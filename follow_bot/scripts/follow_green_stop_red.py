@@ -17,7 +17,9 @@ STEERING = {core.BeaconState.SEARCHING, core.BeaconState.APPROACHING}
 lab.start("follow_green_stop_red", __doc__, {
     "mode": "follow_green_stop_red (default) or approach",
     "close_area": "follow mode: hold once the green blob covers this many px^2",
-    "watchdog_timeout": f"s without a frame before one zero Twist ({core.WATCHDOG_TIMEOUT})",
+    "watchdog_timeout": "s without a frame before one zero Twist, at least "
+                        f"({core.WATCHDOG_TIMEOUT}; a slower camera: 3 frame periods)",
+    "expected_frame_rate": "the camera's rate, Hz: the watchdog's until measured (0: unknown)",
 })  # fmt: skip
 defaults = core.BeaconControllerConfig()
 params = {"mode": "follow_green_stop_red", "close_area": defaults.close_area}

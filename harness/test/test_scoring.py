@@ -73,6 +73,9 @@ def test_command_stats_find_nan_and_rates():
     assert s["max_abs_v"] == pytest.approx(0.5) and s["max_abs_w"] == pytest.approx(1.0)
     assert s["max_abs_dv_dt"] == pytest.approx(2.0)
     assert s["max_abs_dw_dt"] == pytest.approx(15.0)
+    assert s["stops"] == 0  # it starts at zero, then never returns to it
+    stopping = command_stats(t, np.array([0.2, 0.0, 0.0, 0.2, 0.0]), np.zeros(5))
+    assert stopping["stops"] == 2
     with pytest.raises(ValueError, match="lengths differ"):
         command_stats(t, v[:3], w)
 

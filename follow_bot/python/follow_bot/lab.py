@@ -4,8 +4,9 @@ C++ validate(), camera frames as numpy arrays, and the behaviour contract for cm
 The contract (docs/behaviour_contract.md), as follow_bot::CommandOutput keeps it for the C++
 nodes: commands pass the VelocityLimiter; while the behaviour is active one Twist per frame, on
 becoming idle the limiter's ramp down to one zero and then nothing; one ~status per frame (the
-lockstep simulator waits for it); no frame for ~watchdog_timeout of ROS time: one zero; on
-shutdown a last zero.
+lockstep simulator waits for it); no frame for ~watchdog_timeout of ROS time (or 3 frame
+periods of a slower camera, ~expected_frame_rate's until measured: core.FrameWatchdog): one
+zero; on shutdown a last zero.
 """
 
 import argparse
@@ -85,8 +86,12 @@ class CommandOutput:
     def __init__(self, allow_reverse=False):
         self.limiter = core.VelocityLimiter(core.VelocityLimiterConfig(allow_reverse=allow_reverse))
         timeout = rospy.get_param("~watchdog_timeout", core.WATCHDOG_TIMEOUT)
+        rate = rospy.get_param("~expected_frame_rate", core.EXPECTED_FRAME_RATE)
+        if not rate >= 0.0:
+            rospy.logfatal(f"~expected_frame_rate must be >= 0 (0: unknown), got {rate}")
+            sys.exit(2)
         try:
-            self.watchdog = core.FrameWatchdog(timeout)
+            self.watchdog = core.FrameWatchdog(timeout, 1.0 / rate if rate else 0.0)
         except ValueError as error:
             rospy.logfatal(f"~watchdog_timeout: {error}")
             sys.exit(2)

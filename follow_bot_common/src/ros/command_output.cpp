@@ -31,29 +31,38 @@ VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse)
   config.max_angular_accel = positiveParam(pnh, "limit_angular_accel", config.max_angular_accel);
   return config;
 }
+
+// ~expected_frame_rate: 0 (the default) when the camera's rate is unknown.
+double readExpectedFrameRate(const ros::NodeHandle& pnh) {
+  return checkedParam(
+      pnh, "expected_frame_rate", Defaults::expected_frame_rate,
+      [](double v) { return std::isfinite(v) && v >= 0.0; }, ">= 0 (0: unknown)");
+}
+
+double periodOf(double rate) { return rate > 0.0 ? 1.0 / rate : 0.0; }
 }  // namespace
 
 CommandOutput::CommandOutput(ros::NodeHandle& nh, ros::NodeHandle& pnh, bool allow_reverse)
     : limiter_(readLimits(pnh, allow_reverse)),
-      watchdog_(positiveParam(pnh, "watchdog_timeout", Defaults::watchdog_timeout)),
-      wall_watchdog_(positiveParam(pnh, "wall_watchdog_timeout", Defaults::wall_watchdog_timeout)),
-      updater_(nh, pnh, pnh.getNamespace()),
-      expected_rate_(positiveParam(pnh, "expected_frame_rate", Defaults::expected_frame_rate)) {
+      expected_rate_(readExpectedFrameRate(pnh)),
+      watchdog_(positiveParam(pnh, "watchdog_timeout", Defaults::watchdog_timeout),
+                periodOf(expected_rate_)),
+      wall_watchdog_(positiveParam(pnh, "wall_watchdog_timeout", Defaults::wall_watchdog_timeout),
+                     periodOf(expected_rate_)),
+      updater_(nh, pnh, pnh.getNamespace()) {
   publisher_ = nh.advertise<geometry_msgs::Twist>("cmd_vel", 1);
   // A queue: a lockstep simulator must see every frame's answer.
   status_pub_ = pnh.advertise<follow_bot_msgs::BehaviourStatus>("status", 10);
   enable_srv_ = pnh.advertiseService("enable", &CommandOutput::onEnable, this);
   noteParamRead(pnh, "diagnostic_period");  // read by updater_
   updater_.setHardwareID("none");
-  frame_rate_ = std::make_unique<diagnostic_updater::FrequencyStatus>(
-      diagnostic_updater::FrequencyStatusParam(&expected_rate_, &expected_rate_, 0.2, 10),
-      "frame rate");
-  updater_.add(*frame_rate_);
+  updater_.add("frame rate", this, &CommandOutput::reportFrameRate);
   updater_.add("behaviour", this, &CommandOutput::reportStatus);
-  // Four checks per timeout bound the stop delay to 1.25 timeouts (on sim or wall time).
-  timer_ =
-      nh.createTimer(ros::Duration(watchdog_.timeout() / 4.0), &CommandOutput::checkWatchdog, this);
-  wall_timer_ = nh.createSteadyTimer(ros::WallDuration(wall_watchdog_.timeout() / 4.0),
+  // Four checks per (shortest) timeout bound the stop delay to 1.25 timeouts (on sim or wall
+  // time).
+  timer_ = nh.createTimer(ros::Duration(watchdog_.minTimeout() / 4.0),
+                          &CommandOutput::checkWatchdog, this);
+  wall_timer_ = nh.createSteadyTimer(ros::WallDuration(wall_watchdog_.minTimeout() / 4.0),
                                      &CommandOutput::checkWallWatchdog, this);
 }
 
@@ -75,8 +84,8 @@ void CommandOutput::frameArrived() {
   watchdog_.frameArrived(ros::Time::now().toSec());
   wall_watchdog_.frameArrived(ros::SteadyTime::now().toSec());
   outage_stopped_ = false;
+  stopped_by_watchdog_ = false;
   ++frames_;
-  frame_rate_->tick();
 }
 
 void CommandOutput::frameDropped(const std::string& reason) {
@@ -87,11 +96,28 @@ void CommandOutput::frameDropped(const std::string& reason) {
   ++dropped_since_report_;
 }
 
+void CommandOutput::reportFrameRate(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  CameraHealth health;
+  health.frames_seen = frames_ > 0;
+  // A stopped /clock holds ROS time: then only the wall watchdog's outage tells.
+  health.frames_flowing = !outage_stopped_ && !watchdog_.expired(ros::Time::now().toSec());
+  health.stopped_by_watchdog = stopped_by_watchdog_;
+  health.interval = watchdog_.frameInterval();
+  health.expected_rate = expected_rate_;
+  health.timeout = watchdog_.timeout();
+  const StatusReport report = frameRateStatus(health);
+  status.summary(static_cast<unsigned char>(report.level), report.message);
+  for (const auto& [key, value] : report.values) status.add(key, value);
+}
+
 void CommandOutput::reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status) {
-  if (outage_stopped_) {
+  if (stopped_by_watchdog_) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::ERROR,
                     "stopped by the watchdog: no camera frame for %.2f s (%s time)",
                     last_stop_timeout_, last_stop_clock_.c_str());
+  } else if (outage_stopped_) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN,
+                   "no frames, idle: nothing to stop (" + state_ + ")");
   } else if (dropped_since_report_ > 0) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%ld frames dropped since last report",
                     dropped_since_report_);
@@ -118,9 +144,10 @@ Twist2D CommandOutput::send(const std_msgs::Header& frame, const Twist2D& desire
   std::lock_guard<std::mutex> lock(mutex_);
   const ros::Time stamp = frameTime(frame);
   // In double seconds: ros::Time's difference throws beyond 2^31 s, and stamps are input.
-  // A gap longer than the watchdog timeout counts as the timeout: the robot cannot have been
-  // moving longer than that on the last command, so acceleration stays bounded whatever the
-  // stamps say (a backward stamp gives dt <= 0: the limiter then only slows down).
+  // A gap longer than the watchdog timeout in force (the camera's rate sets it) counts as the
+  // timeout: the robot cannot have been moving longer than that on the last command, so
+  // acceleration stays bounded whatever the stamps say (a backward stamp gives dt <= 0: the
+  // limiter then only slows down).
   const double dt = last_stamp_.isZero()
                         ? 0.0
                         : std::min(stamp.toSec() - last_stamp_.toSec(), watchdog_.timeout());
@@ -138,7 +165,7 @@ Twist2D CommandOutput::send(const std_msgs::Header& frame, const Twist2D& desire
   }
   // A frame's work ends here: wall time spent on it (while a lockstep clock waits for this
   // answer) is not silence.
-  wall_watchdog_.frameArrived(ros::SteadyTime::now().toSec());
+  wall_watchdog_.aliveAt(ros::SteadyTime::now().toSec());
   state_ = enabled_ ? state : "disabled (" + state + ")";
 
   follow_bot_msgs::BehaviourStatus status;
@@ -190,9 +217,9 @@ void CommandOutput::checkWatchdogNow() {
   // load the /clock thread can lag the image callbacks, so frames get stamped with a stale time.
   // They arrived within the last check period, so no earlier than now - period: that keeps the
   // stop within 1.25 timeouts of the last frame instead of one period later.
-  const double period = watchdog_.timeout() / 4.0;
+  const double period = watchdog_.minTimeout() / 4.0;
   if (frames_since_check_ > 0) {
-    watchdog_.frameArrived(std::max(watchdog_.lastFrame(), now - period));
+    watchdog_.aliveAt(std::max(watchdog_.lastFrame(), now - period));
   }
   frames_since_check_ = 0;
   if (watchdog_.shouldSendStop(now)) stopForOutage("ROS", watchdog_, now);
@@ -218,6 +245,7 @@ void CommandOutput::stopForOutage(const char* clock, const FrameWatchdog& watchd
   if (outage_stopped_) return;
   outage_stopped_ = true;
   if (quiet_) return;  // already stopped (idle or disabled): nothing to take back
+  stopped_by_watchdog_ = true;
   ++watchdog_stops_;
   last_stop_clock_ = clock;
   last_stop_timeout_ = watchdog.timeout();

@@ -174,11 +174,14 @@ def _max_rate(t: np.ndarray, a: np.ndarray) -> float:
 
 def command_stats(t, v, w, missed_replies: int = 0) -> dict:
     """Extremes of the commanded (v, w) and their rates; non-finite samples are counted,
-    not used. `missed_replies` (frames without a status reply) is passed through for the report.
+    not used. `stops`: how often the command fell from moving to zero (a behaviour halting, a
+    frame watchdog's stop). `missed_replies` (frames without a status reply) is passed through
+    for the report.
     """
     times, lin, ang = (np.asarray(a, dtype=float) for a in (t, v, w))
     if not len(times) == len(lin) == len(ang):
         raise ValueError(f"t, v, w lengths differ: {len(times)}, {len(lin)}, {len(ang)}")
+    moving = (lin != 0.0) | (ang != 0.0)  # NaN included
     return {
         "count": int(len(times)),
         "max_abs_v": _max_abs(lin),
@@ -186,6 +189,7 @@ def command_stats(t, v, w, missed_replies: int = 0) -> dict:
         "max_abs_dv_dt": _max_rate(times, lin),
         "max_abs_dw_dt": _max_rate(times, ang),
         "non_finite": int(np.count_nonzero(~(np.isfinite(lin) & np.isfinite(ang)))),
+        "stops": int(np.count_nonzero(moving[:-1] & ~moving[1:])),
         "missed_replies": int(missed_replies),
     }
 

@@ -8,11 +8,11 @@
 #include <string>
 
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <diagnostic_updater/update_functions.h>
 #include <ros/ros.h>
 #include <std_msgs/Header.h>
 #include <std_srvs/SetBool.h>
 
+#include "follow_bot_common/frame_rate_status.h"
 #include "follow_bot_common/frame_watchdog.h"
 #include "follow_bot_common/velocity_limiter.h"
 
@@ -30,23 +30,31 @@ namespace follow_bot {
 //    state, active, whether a command went out and which. The lockstep simulator waits for it.
 // Two watchdogs, one zero Twist per outage between them (none when already stopped), then
 // nothing until frames return; the destructor publishes a last zero and holds the publisher
-// 0.1 s of wall time so that it leaves. The watchdogs:
-//  * ROS time: no frame for ~watchdog_timeout of ROS time (sim time under use_sim_time).
-//  * Wall (steady) time: no frame for ~wall_watchdog_timeout of wall time while ROS time has not
+// 0.1 s of wall time so that it leaves. Each watchdog's timeout follows the camera's rate
+// (FrameWatchdog: 3 median frame intervals, the expected ~expected_frame_rate's until measured),
+// never below its ~param, so a slow camera's gap between frames is no outage. The watchdogs:
+//  * ROS time: no frame for the timeout (at least ~watchdog_timeout) of ROS time (sim time under
+//    use_sim_time).
+//  * Wall (steady) time: no frame for the timeout (at least ~wall_watchdog_timeout) of wall time
+//    while ROS time has not
 //    advanced for that long of wall time either. With use_sim_time, when /clock and the frames
 //    stop together (the simulator or rosbag died), ROS time stands still and the first rule never
 //    fires. A running ROS clock leaves the decision to the first rule (sim time may run at any
 //    rate). A lockstep simulator holds /clock while it renders, so it sets this timeout above its
 //    longest step: a slow step is not an outage.
 //
-// Diagnostics: one diagnostic_updater status per node on /diagnostics ("<node>: behaviour"):
-// frame rate against ~expected_frame_rate (Hz, 30; +-20 %), frames accepted, frames dropped
-// by reason, watchdog stops (and on which clock), the behaviour's state; ERROR while stopped by
-// the watchdog, WARN when frames were dropped since the last report. Period ~diagnostic_period.
+// Diagnostics: two diagnostic_updater statuses per node on /diagnostics, every
+// ~diagnostic_period. "<node>: frame rate" (frameRateStatus): the measured rate against
+// ~expected_frame_rate (Hz; 0, the default, unknown: any rate is OK; else +-20 %), the
+// watchdog's timeout in force. "<node>: behaviour": frames accepted, frames dropped by reason,
+// watchdog stops (and on which clock), the behaviour's state. Both are ERROR only while the
+// watchdog has stopped the robot; frames stopping while nothing was commanded (idle, disabled)
+// is a WARN saying so; dropped frames since the last report are a WARN.
 //
 // Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
 // ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
-// ~watchdog_timeout (s, 0.15), ~wall_watchdog_timeout (s, 0.15). Invalid values throw
+// ~watchdog_timeout (s, 0.15), ~wall_watchdog_timeout (s, 0.15), ~expected_frame_rate (Hz, 0:
+// unknown). Invalid values throw
 // std::invalid_argument. Negative linear commands are clamped to 0 unless `allow_reverse` (a
 // behaviour that must back up, the parker).
 class CommandOutput {
@@ -67,7 +75,7 @@ class CommandOutput {
   // frameTime(frame) being the frame's time), publishes it per the active/idle rules above and
   // publishes the frame's ~status; `state` names the behaviour's state (status, diagnostics).
   // Returns the limited command: what the robot was told, or zero when quiet. Any stamps are
-  // safe: the time since the previous send is taken as at most ~watchdog_timeout, and as none
+  // safe: the time since the previous send is taken as at most the watchdog's timeout, and as none
   // when it runs backwards.
   Twist2D send(const std_msgs::Header& frame, const Twist2D& desired, bool active,
                const std::string& state);
@@ -82,6 +90,7 @@ class CommandOutput {
   void checkWatchdogNow();
   void checkWallWatchdog(const ros::SteadyTimerEvent&);
   void stopForOutage(const char* clock, const FrameWatchdog& watchdog, double now);
+  void reportFrameRate(diagnostic_updater::DiagnosticStatusWrapper& status);
   void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   std::mutex mutex_;  // frames, ~enable and the watchdog timers may run on different threads
@@ -93,15 +102,15 @@ class CommandOutput {
   ros::Timer timer_;
   ros::SteadyTimer wall_timer_;
   VelocityLimiter limiter_;
-  FrameWatchdog watchdog_;          // on ROS time
-  FrameWatchdog wall_watchdog_;     // on steady time
-  double ros_time_seen_ = -1.0;     // ROS time at the last wall check
-  double ros_time_moved_at_ = 0.0;  // steady time when it last changed
-  bool outage_stopped_ = false;     // one stop per outage, whichever watchdog sees it first
+  double expected_rate_;              // Hz, 0: unknown
+  FrameWatchdog watchdog_;            // on ROS time
+  FrameWatchdog wall_watchdog_;       // on steady time
+  double ros_time_seen_ = -1.0;       // ROS time at the last wall check
+  double ros_time_moved_at_ = 0.0;    // steady time when it last changed
+  bool outage_stopped_ = false;       // one stop per outage, whichever watchdog sees it first
+  bool stopped_by_watchdog_ = false;  // this outage's stop went out: the robot was moving
 
   diagnostic_updater::Updater updater_;
-  double expected_rate_ = 30.0;  // min = max for FrequencyStatus (it keeps pointers)
-  std::unique_ptr<diagnostic_updater::FrequencyStatus> frame_rate_;
   std::string state_ = "starting";
   long frames_ = 0;
   std::map<std::string, long> dropped_;  // by reason
