@@ -57,6 +57,20 @@ def test_pitched_offset_camera_on_rotated_robot():
     assert uv[0, 1] == pytest.approx(240.0 + FX * math.tan(math.atan2(h, 1.5) - pitch), abs=0.5)
 
 
+def test_mounting_error_moves_and_turns_the_camera_on_the_base():
+    # 5 mm to the left and turned 1 deg left: a point 2 m ahead of the described lens, at lens
+    # height, lies 5 mm to the right and 1 deg to the right of the real optical axis.
+    cam = Camera(height_m=0.3, y_offset_error_m=0.005, yaw_error=math.radians(1.0))
+    uv, _ = cam.project(np.array([[2.0, 0.0, 0.3]]), (0.0, 0.0, 0.0))
+    u, v = uv[0]
+    bearing = math.atan2(0.005, 2.0) + math.radians(1.0)  # to the right of the axis
+    assert u == pytest.approx(320.0 + FX * math.tan(bearing), abs=0.05)
+    assert v == pytest.approx(240.0, abs=1e-6)
+    # On a robot facing +y the error turns and moves with the base: 5 mm to -x.
+    _, position = cam.camera_in_world((0.0, 0.0, math.pi / 2))
+    np.testing.assert_allclose(position, [-0.005, 0.0, 0.3], atol=1e-12)
+
+
 def test_horizon_row_for_pitched_camera():
     cam = Camera(pitch=math.radians(20.0))
     assert cam.horizon_row() == pytest.approx(240.0 - FX * math.tan(math.radians(20.0)))

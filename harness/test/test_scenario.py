@@ -2,6 +2,7 @@
 
 import math
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -54,6 +55,18 @@ def test_camera_mounting_moves_the_worlds_camera():
     camera = scenario_world(s).camera
     assert (camera.height_m, camera.pitch) == (0.5, math.radians(10.0))
     assert (camera.x_offset_m, camera.K.tolist()) == (course.x_offset_m, course.K.tolist())
+
+
+def test_mounting_error_moves_only_the_rendered_camera():
+    s = parse_scenario(with_(perturbations={"mounting_error": {"y_offset_m": 0.005, "yaw_deg": 1}}))
+    # The robot description and the node are told the world's mounting...
+    described = scenario_world(s).camera
+    assert (described.y_offset_error_m, described.yaw_error) == (0.0, 0.0)
+    # ...while the simulator renders from the camera 5 mm left, turned 1 deg left.
+    rendered = Simulation(scenario_world(s), perturbations=s.perturbations).renderer.camera
+    assert rendered.y_offset_error_m == 0.005
+    assert rendered.yaw_error == pytest.approx(math.radians(1.0))
+    assert replace(rendered, y_offset_error_m=0.0, yaw_error=0.0) == described
 
 
 def test_behaviour_launch_and_args():

@@ -40,6 +40,21 @@ def test_cross_track_of_offset_circle():
     assert open_ct["max"] == pytest.approx(math.hypot(0.5, 0.2))
 
 
+def test_cross_track_mean_left_is_signed_by_the_heading():
+    # A robot 2 cm outside the unit circle: driven anticlockwise (the centreline's order) the
+    # line is on its left, so it is 2 cm to the right (-); driven clockwise, 2 cm left (+).
+    path = circle(1.02, 777)
+    ccw = np.arctan2(path[:, 1], path[:, 0]) + math.pi / 2
+    right = cross_track(np.column_stack([path, ccw]), CENTRE)
+    assert right["mean_left"] == pytest.approx(-0.02, abs=1e-5)
+    left = cross_track(np.column_stack([path, ccw + math.pi]), CENTRE)
+    assert left["mean_left"] == pytest.approx(0.02, abs=1e-5)
+    # Without headings it is signed along the centreline's order; unsigned mean unchanged.
+    no_heading = cross_track(circle(0.97, 500), CENTRE)
+    assert no_heading["mean_left"] == pytest.approx(0.03, abs=1e-5)
+    assert no_heading["mean"] == pytest.approx(0.03, abs=1e-5)
+
+
 def test_full_lap_detected_with_time():
     path = circle(1.01, 1100, turns=1.1, start=0.3)  # starts away from the seam at angle 0
     t = np.arange(len(path)) * 0.01

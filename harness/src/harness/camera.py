@@ -37,6 +37,10 @@ class Camera:
     height_m: float = 0.30
     pitch: float = 0.0  # radians, positive tilts the optical axis down towards the floor
     x_offset_m: float = 0.0  # forward of the base origin
+    # Where the camera really sits off the mounting above, which is all the robot description
+    # (and so the node under test) knows: a mounting error (scenario perturbation).
+    y_offset_error_m: float = 0.0  # optical centre this far left of where it is said to be
+    yaw_error: float = 0.0  # radians, optical axis turned this far left (about the base z)
     frame_id: str = FRAME_ID
     distortion: tuple[float, float, float, float, float] = PINHOLE  # plumb_bob k1 k2 p1 p2 k3
 
@@ -104,8 +108,9 @@ class Camera:
         """(R_world_optical, camera position in world) for a robot pose (x, y, yaw)."""
         x, y, yaw = pose
         r_wb = rot_z(yaw)
-        position = np.array([x, y, 0.0]) + r_wb @ np.array([self.x_offset_m, 0.0, self.height_m])
-        return r_wb @ self.base_to_optical(), position
+        offset = np.array([self.x_offset_m, self.y_offset_error_m, self.height_m])
+        position = np.array([x, y, 0.0]) + r_wb @ offset
+        return r_wb @ rot_z(self.yaw_error) @ self.base_to_optical(), position
 
     def world_to_camera(self, pose: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
         """(R, t) such that p_optical = R @ p_world + t."""

@@ -118,6 +118,15 @@ def project_onto_polyline(
     Returns (distance N, arc_length N); arc length is measured from polyline[0] along the
     point order. Vectorised in chunks so long runs against dense centrelines stay fast.
     """
+    dist, arc, _, _ = nearest_on_polyline(points, polyline, closed)
+    return dist, arc
+
+
+def nearest_on_polyline(
+    points: np.ndarray, polyline: np.ndarray, closed: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """project_onto_polyline's (distance, arc length), plus the signed distance (positive left
+    of the polyline's point order) and the unit direction (Nx2) of the nearest segment."""
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     starts, vec = polyline_segments(polyline, closed)
     seg_len2 = np.maximum((vec**2).sum(axis=1), 1e-300)
@@ -125,6 +134,7 @@ def project_onto_polyline(
     cum = np.concatenate([[0.0], np.cumsum(seg_len)[:-1]])
     dist = np.empty(len(pts))
     arc = np.empty(len(pts))
+    best_all = np.empty(len(pts), dtype=int)
     rows = max(1, _CHUNK_ELEMENTS // max(1, len(starts)))
     for i in range(0, len(pts), rows):
         p = pts[i : i + rows, None, :]
@@ -135,7 +145,11 @@ def project_onto_polyline(
         idx = np.arange(len(best))
         dist[i : i + rows] = np.sqrt(d2[idx, best])
         arc[i : i + rows] = cum[best] + t[idx, best] * seg_len[best]
-    return dist, arc
+        best_all[i : i + rows] = best
+    direction = vec[best_all] / seg_len[best_all, None]
+    rel = pts - starts[best_all]
+    left = direction[:, 0] * rel[:, 1] - direction[:, 1] * rel[:, 0]
+    return dist, arc, np.where(left < 0.0, -dist, dist), direction
 
 
 def clip_polygon_near(poly: np.ndarray, z_near: float) -> np.ndarray:

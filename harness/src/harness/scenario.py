@@ -242,6 +242,7 @@ def _parse_perturbations(value: Any, where: str) -> Perturbations:
         "hide",
         "realism",
         "lens",
+        "mounting_error",
     }
     f = Fields(value, where, allowed)
     delay = f.get("delay_steps", number(ge=0.0), None)
@@ -256,7 +257,14 @@ def _parse_perturbations(value: Any, where: str) -> Perturbations:
         hidden=f.get("hide", _parse_hidden, ()),
         realism=tuple(f.get("realism", parse_realism, {}).items()),
         lens=f.get("lens", parse_distortion, None),
+        mounting_error=f.get("mounting_error", _parse_mounting_error, ()),
     )
+
+
+def _parse_mounting_error(value: Any, where: str) -> tuple[tuple[str, float], ...]:
+    f = Fields(value, where, {"y_offset_m", "yaw_deg"})
+    error = {k: f.get(k, number(), None) for k in ("y_offset_m", "yaw_deg")}
+    return tuple((k, v) for k, v in error.items() if v is not None)
 
 
 def _parse_criteria(value: Any, where: str) -> tuple[Criterion, ...]:

@@ -9,7 +9,12 @@ import math
 
 import numpy as np
 
-from harness.geometry import polyline_length, project_onto_polyline, wrap_angle
+from harness.geometry import (
+    nearest_on_polyline,
+    polyline_length,
+    project_onto_polyline,
+    wrap_angle,
+)
 from harness.world import AprilTagMarker, Box, Sphere, TextureMarker, WorldObject
 
 # TurtleBot 2 (Kobuki) base radius: the gap to an obstacle is measured from the bumper.
@@ -26,14 +31,22 @@ def _xy(path) -> np.ndarray:
 
 
 def cross_track(path, centreline: np.ndarray, closed: bool = True) -> dict:
-    """Distance from each path point to the nearest centreline segment: RMS, max, mean."""
-    dist, _ = project_onto_polyline(_xy(path), centreline, closed)
+    """Distance from each path point to the nearest centreline segment: RMS, max, mean, and the
+    mean of the signed distance (`mean_left`: positive left of the line seen along the robot's
+    heading, or along the centreline's point order for a path without headings), which shows a
+    bias that the unsigned figures fold away."""
+    dist, _, left, direction = nearest_on_polyline(_xy(path), centreline, closed)
     if len(dist) == 0:
-        return {"rms": 0.0, "max": 0.0, "mean": 0.0, "samples": 0}
+        return {"rms": 0.0, "max": 0.0, "mean": 0.0, "mean_left": 0.0, "samples": 0}
+    along = np.ones(len(dist))
+    if np.asarray(path).shape[1] >= 3:
+        yaw = np.asarray(path, dtype=float)[:, 2]
+        along = direction[:, 0] * np.cos(yaw) + direction[:, 1] * np.sin(yaw)
     return {
         "rms": float(np.sqrt(np.mean(dist**2))),
         "max": float(dist.max()),
         "mean": float(dist.mean()),
+        "mean_left": float(np.mean(np.where(along < 0.0, -left, left))),
         "samples": int(len(dist)),
     }
 

@@ -37,6 +37,9 @@ class Perturbations:
     realism: tuple[tuple[str, Any], ...] = ()
     # The camera's plumb_bob lens (k1, k2, p1, p2, k3) instead of the world's; None keeps it.
     lens: tuple[float, float, float, float, float] | None = None
+    # The camera rendered this far off its described mounting (Camera.y_offset_error_m,
+    # Camera.yaw_error in degrees): a mounting error the robot description does not tell.
+    mounting_error: tuple[tuple[str, float], ...] = ()
 
 
 def with_line_gaps(world: World, gaps: tuple[tuple[float, float], ...]) -> World:
@@ -133,6 +136,12 @@ class Simulation:
         p = self.perturbations
         painted = with_line_gaps(world, p.line_gaps)
         camera = world.camera if p.lens is None else replace(world.camera, distortion=p.lens)
+        error = dict(p.mounting_error)
+        camera = replace(
+            camera,
+            y_offset_error_m=error.get("y_offset_m", 0.0),
+            yaw_error=math.radians(error.get("yaw_deg", 0.0)),
+        )
         self.renderer = Renderer(
             painted,
             camera,
