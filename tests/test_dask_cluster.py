@@ -18,6 +18,10 @@ import pytest
 from harness.report import without_wall_clock
 from harness.run_scenario import free_port
 
+# Infrastructure checks of a minute or more each: `make test-full` plays them, so `make test`
+# keeps within its 12 minutes with every bad-input, fault and scenario-family test.
+pytestmark = pytest.mark.full
+
 SCENARIOS = Path(__file__).resolve().parents[1] / "worlds" / "scenarios"
 RUNS = ("constant_arc", "drive_parking")  # short lockstep runs with the scripted driver
 DASK_BIN = Path(sys.executable).parent  # the venv's `dask` command line

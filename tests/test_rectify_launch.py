@@ -7,6 +7,10 @@ import subprocess
 
 import pytest
 
+# Infrastructure checks of a minute or more each: `make test-full` plays them, so `make test`
+# keeps within its 12 minutes with every bad-input, fault and scenario-family test.
+pytestmark = pytest.mark.full
+
 # launch file: (node name, nodelet class, the manager it makes with rectify)
 BEHAVIOURS = {
     "follower.launch": ("follower", "follow_bot/FollowerNodelet", "follower_manager"),

@@ -14,6 +14,10 @@ import pytest
 
 from harness.report import without_wall_clock
 
+# Infrastructure checks of a minute or more each: `make test-full` plays them, so `make test`
+# keeps within its 12 minutes with every bad-input, fault and scenario-family test.
+pytestmark = pytest.mark.full
+
 SCENARIO = Path(__file__).resolve().parents[1] / "worlds" / "scenarios" / "constant_arc.yaml"
 
 

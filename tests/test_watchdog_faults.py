@@ -324,7 +324,12 @@ def test_diagnostics_tell_why_the_robot_stopped(faults):
     key, r = faults
     last, wall_stop = r["diagnostics_last"], r["diagnostics_wall_stop"]
     assert last is not None, "no diagnostics for the node"
-    assert last["watchdog stops"] == "3", last  # frames stop, after the jump, with /clock
+    # Frames stop, after the jump, with /clock: 3. At a resolution change the new camera_info and
+    # the first frame of that size travel on different connections; a frame that arrives first is
+    # dropped (counted by its reason), goes unanswered, and the lockstep client's wait for its
+    # answer is a wall-clock outage: at most one stop more per such drop.
+    size_drops = sum(int(v) for k, v in last.items() if k.startswith("dropped: the frame is"))
+    assert 3 <= int(last["watchdog stops"]) <= 3 + size_drops, last
     assert last["dropped: step N is not a multiple of N bytes"] == "3", last
     assert int(last["frames accepted"]) > 100 and last["state"], last
     # The report forced at the /clock-and-frames outage: an error naming the wall clock.
