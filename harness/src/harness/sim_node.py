@@ -43,10 +43,10 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
+from follow_bot.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from follow_bot_msgs.msg import BehaviourStatus
 from harness.debug_video import DebugView
 from harness.node_cli import parse_node_command_line
-from harness.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from harness.scenario import ScenarioError, load_scenario, scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
