@@ -245,6 +245,45 @@ def test_matrix_errors_name_the_axis(tmp_path, matrix, words):
         load_scenarios(family)
 
 
+def test_measured_values_bound_each_member_beside_the_specification(tmp_path):
+    family = tmp_path / "fam.yaml"
+    family.write_text(
+        f"""
+base: {MINIMAL}
+matrix: {{duration: {{short: 1.0, long: 3.0}}}}
+measured:
+  floor: {{cross_track.rms: 0.0005, cross_track.max: 0.003}}
+  runs:
+    short: {{cross_track.rms: 0.0001, cross_track.max: -0.004}}
+"""
+    )
+    runs = {s.name: s for s in load_scenarios(family)}
+    rms, worst = runs["fam/short"].criteria[-2:]
+    # 3 x 0.1 mm is under the 0.5 mm floor; 3 x |-4 mm| is over the 3 mm one
+    assert (rms.metric, rms.maximum, rms.absolute) == ("cross_track.rms", 0.0005, True)
+    assert (worst.metric, worst.maximum) == ("cross_track.max", pytest.approx(0.012))
+    assert worst.check({"cross_track": {"max": -0.0119}}) == (-0.0119, True)
+    assert worst.check({"cross_track": {"max": -0.0121}}) == (-0.0121, False)
+    assert worst.describe() == "|value| <= 0.012"
+    assert not any(c.absolute for c in runs["fam/long"].criteria)  # not measured: the spec only
+
+
+@pytest.mark.parametrize(
+    "measured, words",
+    [
+        ("{floor: {a: 1}, runs: {medium: {a: 1}}}", "measured.runs.medium: the family has no run"),
+        ("{floor: {a: 1}, runs: {short: {b: 1}}}", "measured.runs.short.b: measured.floor gives"),
+        ("{floor: {a: 0}, runs: {}}", "measured.floor.a: must be > 0"),
+    ],
+)
+def test_measured_errors_name_the_member(tmp_path, measured, words):
+    family = tmp_path / "fam.yaml"
+    matrix = "{duration: {short: 1.0}}"
+    family.write_text(f"base: {MINIMAL}\nmatrix: {matrix}\nmeasured: {measured}\n")
+    with pytest.raises(ScenarioError, match=re.escape(words)):
+        load_scenarios(family)
+
+
 def test_start_by_intent_is_distance_off_normal_and_bearing():
     tag_x, tag_y = 3.0, 0.0  # goal_tag faces -x (yaw pi) in the parking world
     start = {"from": "goal_tag", "distance": 2.0, "off_deg": 20.0, "bearing_deg": 60.0}

@@ -54,6 +54,9 @@ STOP_CONDITIONS = ("duration", "lap_complete", "still")
 # `stop_when: still` waits at least this long without motion: longer than a behaviour's hold
 # while its target is briefly lost (the parker holds 2 s, then searches), so a pause is not an end.
 STILL_STOP_S = 3.0
+# A family's `measured` values bound each member at this multiple of its own measurement (or the
+# family's stated noise floor, if larger), beside the specification's bounds.
+MEASURED_FACTOR = 3.0
 
 
 class ScenarioError(ValidationError):
@@ -73,6 +76,7 @@ class Criterion:
     minimum: float | None = None
     maximum: float | None = None
     equals: Any = None
+    absolute: bool = False  # the bounds hold the value's magnitude (an error either way)
 
     def check(self, metrics: dict) -> tuple[Any, bool]:
         value: Any = metrics
@@ -87,9 +91,10 @@ class Criterion:
             return value, value == self.equals
         if not isinstance(value, int | float) or isinstance(value, bool):
             return value, False  # a metric that is absent or None never passes a bound
-        ok = math.isfinite(value)
-        ok &= self.minimum is None or value >= self.minimum
-        ok &= self.maximum is None or value <= self.maximum
+        bounded = abs(value) if self.absolute else value
+        ok = math.isfinite(bounded)
+        ok &= self.minimum is None or bounded >= self.minimum
+        ok &= self.maximum is None or bounded <= self.maximum
         return value, bool(ok)
 
     def margin(self, value: Any) -> float | None:
@@ -102,6 +107,7 @@ class Criterion:
             return None
         if not math.isfinite(value):
             return None
+        value = abs(value) if self.absolute else value
         if self.minimum is not None and self.maximum is not None:
             scale = (self.maximum - self.minimum) / 2.0
         else:
@@ -119,7 +125,7 @@ class Criterion:
             parts.append(f">= {self.minimum:g}")
         if self.maximum is not None:
             parts.append(f"<= {self.maximum:g}")
-        return " and ".join(parts)
+        return ("|value| " if self.absolute else "") + " and ".join(parts)
 
 
 @dataclass(frozen=True)
@@ -283,6 +289,15 @@ def _parse_criteria(value: Any, where: str) -> tuple[Criterion, ...]:
     return tuple(out)
 
 
+def _parse_regression(value: Any, where: str) -> tuple[Criterion, ...]:
+    """`regression: {metric: bound}`: the metric's magnitude at most `bound`, a second criterion
+    beside the specification's (a family writes these from its `measured` values)."""
+    return tuple(
+        Criterion(str(metric), maximum=number(gt=0.0)(bound, f"{where}.{metric}"), absolute=True)
+        for metric, bound in mapping(value, where).items()
+    )
+
+
 def _start_pose(value: Any, where: str, world_path: Path) -> tuple[float, float, float]:
     """[x, y, yaw], or {from, distance, off_deg, bearing_deg}: `distance` m from the centre of
     the marker or box `from`, `off_deg` counter-clockwise off its facing direction (its normal),
@@ -323,7 +338,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
     allowed = {
         "name", "world", "start", "behaviour", "driver", "rate_hz", "duration", "stop_when",
         "lockstep", "reply_timeout", "perturbations", "target", "watch", "goal", "standoff",
-        "criteria", "seed", "camera_transport", "camera_mounting",
+        "criteria", "regression", "seed", "camera_transport", "camera_mounting",
     }  # fmt: skip
     try:
         f = Fields(data, "", allowed)
@@ -339,6 +354,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
         lockstep = f.get("lockstep", boolean, True)
         criteria = runner_criteria(world_path, lockstep)
         criteria.update((c.metric, c) for c in f.get("criteria", _parse_criteria, ()))
+        regression = f.get("regression", _parse_regression, ())
         name = f.get("name", string, source.stem if source else "scenario")
         duration = f.get("duration", number(gt=0.0))
         seed = f.get("seed", integer(ge=0), None)
@@ -369,7 +385,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             watch=f.get("watch", string, None),
             goal=f.get("goal", string, None),
             standoff=f.get("standoff", number(gt=0.0), 0.5),
-            criteria=tuple(criteria.values()),
+            criteria=(*criteria.values(), *regression),
             seed=seed,
             camera_transport=f.get("camera_transport", parse_camera_transport, None),
             camera_mounting=f.section("camera_mounting", _parse_camera_mounting),
@@ -459,7 +475,7 @@ def expand(data: Any, family: str, base_dir: Path = Path(".")) -> list[tuple[dic
     family file's `base`. A file without `matrix` or `sweep` is one run as written."""
     if not (isinstance(data, dict) and ("matrix" in data or "sweep" in data)):
         return [(data, {})]
-    f = Fields(data, "", {"base", "matrix", "labels", "sweep", "extends"})
+    f = Fields(data, "", {"base", "matrix", "labels", "sweep", "extends", "measured"})
     base = f.get("base", mapping, {})
     if f.has("extends"):
         parent = _read_yaml(base_dir / f.get("extends", string))
@@ -468,6 +484,8 @@ def expand(data: Any, family: str, base_dir: Path = Path(".")) -> list[tuple[dic
     if "sweep" in data:
         if "matrix" in data or "labels" in data:
             raise ScenarioError("sweep: a file holds a matrix or a sweep, not both")
+        if "measured" in data:
+            raise ScenarioError("measured: bounds a matrix's members; a sweep is judged by its rate")
         return _sweep(base, data["sweep"], family)
     labels = f.get("labels", mapping, {})
     blocks = f.data["matrix"]
@@ -485,7 +503,32 @@ def expand(data: Any, family: str, base_dir: Path = Path(".")) -> list[tuple[dic
             if name in runs:
                 raise ScenarioError(f"{where}: two runs are named {name!r}")
             runs[name] = {**run, "name": name}
+    if f.has("measured"):
+        _bound_by_measurement(runs, f.data["measured"], family)
     return [(run, {}) for run in runs.values()]
+
+
+def _bound_by_measurement(runs: dict[str, dict], section: Any, family: str) -> None:
+    """Lays each member's `regression` bounds from the family's `measured: {floor, runs}`:
+    MEASURED_FACTOR times the member's measured magnitude of each metric, never below the
+    metric's stated noise floor."""
+    f = Fields(section, "measured", {"floor", "runs"})
+    floors = {
+        str(metric): number(gt=0.0)(v, f"measured.floor.{metric}")
+        for metric, v in f.get("floor", mapping).items()
+    }
+    for label, values in f.get("runs", mapping).items():
+        where = f"measured.runs.{label}"
+        run = runs.get(f"{family}/{label}")
+        if run is None:
+            raise ScenarioError(f"{where}: the family has no run {family}/{label}")
+        bounds = {}
+        for metric, measured in mapping(values, where).items():
+            if metric not in floors:
+                raise ScenarioError(f"{where}.{metric}: measured.floor gives this metric no floor")
+            value = number()(measured, f"{where}.{metric}")
+            bounds[str(metric)] = max(MEASURED_FACTOR * abs(value), floors[metric])
+        run["regression"] = {**run.get("regression", {}), **bounds}
 
 
 def load_scenarios(path: Path | str) -> list[Scenario]:
