@@ -102,8 +102,7 @@ def test_lens_runs_keep_their_pinhole_twins_start_and_bounds():
         assert run.perturbations.lens == LENSES["turtlebot3"], name
         assert not twin.perturbations.lens, twin_name
         # the specification's bounds; each has its own measured ones besides (`measured`)
-        spec, twin_spec = ([c for c in s.criteria if not c.absolute] for s in (run, twin))
-        assert (run.start, spec) == (twin.start, twin_spec), name
+        assert (run.start, run.spec_criteria) == (twin.start, twin.spec_criteria), name
 
 
 @pytest.fixture(scope="session")

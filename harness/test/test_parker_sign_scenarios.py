@@ -61,7 +61,7 @@ def test_the_lens_runs_replay_pinhole_starts_through_the_turtlebot3_lens():
     twins = {s.name: s for s in SCENARIOS}
     for run in lens_runs:
         twin = twins[run.name.removesuffix("_lens")]
-        assert run.start == twin.start and run.criteria == twin.criteria
+        assert run.start == twin.start and run.spec_criteria == twin.spec_criteria
         assert run.perturbations.lens == LENSES["turtlebot3"]
 
 

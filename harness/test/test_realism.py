@@ -235,7 +235,7 @@ def test_realistic_families_extend_the_clean_ones_with_their_bounds():
     lap = load_scenarios(folder / "follower_realistic.yaml")[0]
     assert lap.name == "follower_realistic/realistic"
     assert dict(lap.perturbations.realism) == PROFILES["realistic"]
-    assert {c.metric: c.maximum for c in lap.criteria}["cross_track.rms"] == 0.001
+    assert {c.metric: c.maximum for c in lap.spec_criteria}["cross_track.rms"] == 0.001
     laps = {run.name: run for run in load_scenarios(folder / "follower_realistic.yaml")}
     for seed in (1, 2, 3):
         other = laps[f"follower_realistic/realistic_seed{seed}"]
@@ -244,4 +244,4 @@ def test_realistic_families_extend_the_clean_ones_with_their_bounds():
     fast = laps["follower_realistic/realistic_fast"]
     assert fast.perturbations.realism == lap.perturbations.realism
     assert fast.behaviour.args["max_linear"] == "0.7"
-    assert {c.metric: c.maximum for c in fast.criteria}["cross_track.max"] == 0.030
+    assert {c.metric: c.maximum for c in fast.spec_criteria}["cross_track.max"] == 0.030

@@ -180,6 +180,11 @@ class Scenario:
     parameters: dict = field(default_factory=dict, compare=False)  # a sweep member's draws
 
     @property
+    def spec_criteria(self) -> tuple[Criterion, ...]:
+        """The criteria but the member's own bounds from its measured values (`regression`)."""
+        return tuple(c for c in self.criteria if not c.absolute)
+
+    @property
     def still_stop_s(self) -> float:
         """How long every command must have been zero before `stop_when: still` ends the run:
         as long as the criteria's still_since bounds demand at the end of the full `duration`
@@ -485,7 +490,7 @@ def expand(data: Any, family: str, base_dir: Path = Path(".")) -> list[tuple[dic
         if "matrix" in data or "labels" in data:
             raise ScenarioError("sweep: a file holds a matrix or a sweep, not both")
         if "measured" in data:
-            raise ScenarioError("measured: bounds a matrix's members; a sweep is judged by its rate")
+            raise ScenarioError("measured: bounds a matrix's members; a sweep is judged by rate")
         return _sweep(base, data["sweep"], family)
     labels = f.get("labels", mapping, {})
     blocks = f.data["matrix"]
