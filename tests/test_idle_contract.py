@@ -218,7 +218,7 @@ def gave_up() -> dict:
 def test_follower_that_gave_up_sends_exactly_one_zero_then_nothing(gave_up):
     statuses, k = gave_up["statuses"], gave_up["gave_up_at"]
     assert statuses[29][:2] == [True, True] and statuses[29][2] > 0  # it drove
-    assert statuses[k][4] == "GAVE_UP"
+    assert statuses[k][4] == "gave_up"
     after = sent_commands(gave_up, k)
     assert after[-1] == (0.0, 0.0) and (0.0, 0.0) not in after[:-1]  # a ramp down, one zero
     last_sent = max(i for i, s in enumerate(statuses) if s[1])

@@ -188,7 +188,7 @@ def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown():
                 node.kill()
     result = json.loads(done.stdout.strip().splitlines()[-1])
     statuses, twists = result["statuses"], [(v, w) for _, v, w in result["twists"]]
-    assert [s[4] for s in statuses] == ["APPROACHING"] * 15 + ["STOPPED_BY_RED"] * 30
+    assert [s[4] for s in statuses] == ["approaching"] * 15 + ["stopped_by_red"] * 30
     assert all(s[0] and s[1] for s in statuses[:15])  # active: a command every frame
     speeds = [s[2] for s in statuses[:15]]
     # Ramped up by the limiter from the first frame's zero (no interval to accelerate over yet).

@@ -300,7 +300,7 @@ def test_steering_laws_equal_cpp_on_course_frames(tmp_path, mode):
         assert law.state.name == cpp["state"], cpp["frame"]
         states.add(cpp["state"])
     # The sequence sees the line, then loses it (path still steers on its memory of the line).
-    assert states == ({"FOLLOWING"} if mode == "path" else {"FOLLOWING", "LOST"})
+    assert states == ({"following"} if mode == "path" else {"following", "lost"})
 
 
 def test_path_law_without_a_camera_is_pd_and_exposes_its_memory():
@@ -343,22 +343,22 @@ def test_pd_law_and_line_search_as_the_gtests():
     unseen = core.LineMeasurement(image_width=640, image_height=480)
     law.step(seen_at_error(0.6), 0.0)
     assert twist_fields(law.step(unseen, 0.5)) == pytest.approx((0.05, -0.4), abs=1e-9)
-    assert law.state == core.LineState.LOST
+    assert law.state == core.LineState.lost
     law.step(unseen, 1.0)
     assert twist_fields(law.step(unseen, 1.01)) == pytest.approx((0.0, -0.6), abs=1e-9)
-    assert law.state == core.LineState.SEARCHING
+    assert law.state == core.LineState.searching
     assert twist_fields(law.step(unseen, 13.01)) == (0.0, 0.0)
-    assert law.state == core.LineState.GAVE_UP
+    assert law.state == core.LineState.gave_up
     assert law.step(seen_at_error(-0.2), 501.0).angular > 0.0
-    assert law.state == core.LineState.FOLLOWING
+    assert law.state == core.LineState.following
     # The same state machine alone.
     search = core.LineSearch()
     search.seen(0.0, 0.6)
     assert twist_fields(search.unseen(0.5)) == pytest.approx((0.05, -0.4), abs=1e-9)
     assert twist_fields(search.unseen(1.01)) == pytest.approx((0.0, -0.6), abs=1e-9)
-    assert search.state == core.LineState.SEARCHING
+    assert search.state == core.LineState.searching
     search.reset()
-    assert search.state == core.LineState.LOST
+    assert search.state == core.LineState.lost
     # The lecture: linear 0.2, angular -error_px / 100 whenever a pixel is seen.
     lecture = core.LectureLaw().step(seen_at_error(0.25), 0.0)
     assert twist_fields(lecture) == pytest.approx((0.2, -0.8), abs=1e-9)
@@ -378,13 +378,13 @@ def test_parking_servo_equals_cpp_over_a_tag_sequence(tmp_path):
     for i, (grey, cpp) in enumerate(zip(greys, expected, strict=True)):
         marker = detector.detect(grey, camera)
         assert_twist_close(servo.update(marker, i / 30.0), cpp, cpp["frame"])
-        assert servo.state.name.lower() == cpp["state"], cpp["frame"]
+        assert servo.state.name == cpp["state"], cpp["frame"]
         error = servo.last_error
         assert (error is None) == (cpp["error"] is None)
         if error is not None:
             for name, value in cpp["error"].items():
                 assert getattr(error, name) == pytest.approx(value, abs=1e-9), (cpp["frame"], name)
-    assert servo.state != core.ParkingState.SEARCHING
+    assert servo.state != core.ParkingState.searching
 
 
 def test_parking_error_of_a_marker_made_in_python():
@@ -465,20 +465,20 @@ def test_beacon_controller_follow_mode_as_the_gtests():
     controller = core.BeaconController()
     config = controller.config
     twist = controller.update(nothing, 0.0)
-    assert controller.state == core.BeaconState.SEARCHING
+    assert controller.state == core.BeaconState.searching
     assert (twist.linear, twist.angular) == (0.0, config.search_rate)
     twist = controller.update(blobs(absent[0], blob("green", 480.0, 2000.0), absent[2]), 0.1)
-    assert controller.state == core.BeaconState.APPROACHING
+    assert controller.state == core.BeaconState.approaching
     assert twist.linear == config.approach_speed
     assert twist.angular == pytest.approx(-config.turn_gain * 0.5, abs=1e-9)
     twist = controller.update(blobs(absent[0], blob("green", 160.0, 2000.0), absent[2]), 0.2)
     assert twist.angular == pytest.approx(config.turn_gain * 0.5, abs=1e-9)
     close = blobs(absent[0], blob("green", 330.0, config.close_area), absent[2])
     twist = controller.update(close, 0.3)
-    assert controller.state == core.BeaconState.HOLDING and twist.linear == 0.0
+    assert controller.state == core.BeaconState.holding and twist.linear == 0.0
     red = blobs(blob("red", 500.0, 800.0), blob("green", 400.0, 2000.0), absent[2])
     twist = controller.update(red, 0.4)
-    assert controller.state == core.BeaconState.STOPPED_BY_RED
+    assert controller.state == core.BeaconState.stopped_by_red
     assert (twist.linear, twist.angular) == (0.0, 0.0)
     controller.reset()
     assert controller.update(nothing, 0.0).angular == config.search_rate

@@ -381,12 +381,12 @@ void bindBeaconController(py::module_& m) {
   defStringInit(mode, &parseBeaconMode);
 
   py::enum_<BeaconState>(m, "BeaconState")
-      .value("SEARCHING", BeaconState::kSearching)
-      .value("APPROACHING", BeaconState::kApproaching)
-      .value("HOLDING", BeaconState::kHolding)
-      .value("STOPPED_BY_RED", BeaconState::kStoppedByRed)
-      .value("LOST", BeaconState::kLost)
-      .value("ARRIVED", BeaconState::kArrived);
+      .value(toString(BeaconState::kSearching), BeaconState::kSearching)
+      .value(toString(BeaconState::kApproaching), BeaconState::kApproaching)
+      .value(toString(BeaconState::kHolding), BeaconState::kHolding)
+      .value(toString(BeaconState::kStoppedByRed), BeaconState::kStoppedByRed)
+      .value(toString(BeaconState::kLost), BeaconState::kLost)
+      .value(toString(BeaconState::kArrived), BeaconState::kArrived);
 
   using Config = BeaconControllerConfig;
   py::class_<Config> config(m, "BeaconControllerConfig");
@@ -507,10 +507,10 @@ void bindSteering(py::module_& m) {
   defStringInit(mode, &parseSteeringMode);
 
   py::enum_<LineState>(m, "LineState")
-      .value("FOLLOWING", LineState::kFollowing)
-      .value("LOST", LineState::kLost)
-      .value("SEARCHING", LineState::kSearching)
-      .value("GAVE_UP", LineState::kGaveUp);
+      .value(toString(LineState::kFollowing), LineState::kFollowing)
+      .value(toString(LineState::kLost), LineState::kLost)
+      .value(toString(LineState::kSearching), LineState::kSearching)
+      .value(toString(LineState::kGaveUp), LineState::kGaveUp);
 
   py::class_<PdConfig> pd(m, "PdConfig", "pd's steering and speed taper.");
   pd.def_readwrite("kp", &PdConfig::kp)
@@ -669,11 +669,11 @@ void bindSignDetector(py::module_& m) {
 
 void bindParkingServo(py::module_& m) {
   py::enum_<ParkingState>(m, "ParkingState")
-      .value("SEARCHING", ParkingState::kSearching)
-      .value("APPROACHING", ParkingState::kApproaching)
-      .value("ALIGNING", ParkingState::kAligning)
-      .value("PARKED", ParkingState::kParked)
-      .value("LOST", ParkingState::kLost);
+      .value(toString(ParkingState::kSearching), ParkingState::kSearching)
+      .value(toString(ParkingState::kApproaching), ParkingState::kApproaching)
+      .value(toString(ParkingState::kAligning), ParkingState::kAligning)
+      .value(toString(ParkingState::kParked), ParkingState::kParked)
+      .value(toString(ParkingState::kLost), ParkingState::kLost);
 
   using Config = ParkingServoConfig;
   py::class_<Config> config(m, "ParkingServoConfig");

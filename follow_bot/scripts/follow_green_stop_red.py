@@ -12,7 +12,7 @@ import rospy
 from follow_bot import core, lab
 
 # Searching and approaching steer; the states that stand still are idle (as beacon_chaser).
-STEERING = {core.BeaconState.SEARCHING, core.BeaconState.APPROACHING}
+STEERING = {core.BeaconState.searching, core.BeaconState.approaching}
 
 lab.start("follow_green_stop_red", __doc__, {
     "mode": "follow_green_stop_red (default) or approach",

@@ -58,7 +58,7 @@ def on_frame(header, bgr):
     if config.mode == core.SteeringMode.path and camera and not isinstance(law, core.PathLaw):
         law = core.make_steering_law(config, camera[0])
     desired = law.step(detector.detect(bgr), header.stamp.to_sec(), applied)
-    applied = output.send(header, desired, law.state != core.LineState.GAVE_UP, law.state.name)
+    applied = output.send(header, desired, law.state != core.LineState.gave_up, law.state.name)
 
 
 rospy.Subscriber("camera/rgb/camera_info", CameraInfo, on_camera_info, queue_size=1)

@@ -427,8 +427,8 @@ TEST(BeaconControllerConfig, DefaultIsValidAndModesRoundTrip) {
     EXPECT_EQ(parseBeaconMode(toString(mode)), mode);
   }
   EXPECT_FALSE(parseBeaconMode("follow"));
-  EXPECT_STREQ(toString(BeaconState::kStoppedByRed), "STOPPED_BY_RED");
-  EXPECT_STREQ(toString(BeaconState::kArrived), "ARRIVED");
+  EXPECT_STREQ(toString(BeaconState::kStoppedByRed), "stopped_by_red");
+  EXPECT_STREQ(toString(BeaconState::kArrived), "arrived");
 }
 
 TEST(BeaconControllerConfig, ValidateNamesTheBadField) {

@@ -386,8 +386,8 @@ TEST(SteeringLaw, NamesModesAndStates) {
   EXPECT_STREQ(toString(SteeringMode::kPath), "path");
   EXPECT_EQ(parseSteeringMode("PID"), std::nullopt);
   EXPECT_EQ(parseSteeringMode("Path"), std::nullopt);
-  EXPECT_STREQ(toString(LineState::kGaveUp), "GAVE_UP");
-  EXPECT_STREQ(toString(LineState::kSearching), "SEARCHING");
+  EXPECT_STREQ(toString(LineState::kGaveUp), "gave_up");
+  EXPECT_STREQ(toString(LineState::kSearching), "searching");
 }
 
 // Feeds pd and path the same frames (path its own commands as the motion) and returns, for each,

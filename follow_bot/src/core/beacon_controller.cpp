@@ -194,19 +194,19 @@ const char* toString(BeaconMode mode) {
 const char* toString(BeaconState state) {
   switch (state) {
     case BeaconState::kSearching:
-      return "SEARCHING";
+      return "searching";
     case BeaconState::kApproaching:
-      return "APPROACHING";
+      return "approaching";
     case BeaconState::kHolding:
-      return "HOLDING";
+      return "holding";
     case BeaconState::kStoppedByRed:
-      return "STOPPED_BY_RED";
+      return "stopped_by_red";
     case BeaconState::kLost:
-      return "LOST";
+      return "lost";
     case BeaconState::kArrived:
-      return "ARRIVED";
+      return "arrived";
   }
-  return "UNKNOWN";
+  return "unknown";
 }
 
 std::string validate(const BeaconControllerConfig& c) {

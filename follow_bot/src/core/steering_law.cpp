@@ -41,15 +41,15 @@ const char* toString(SteeringMode mode) {
 const char* toString(LineState state) {
   switch (state) {
     case LineState::kFollowing:
-      return "FOLLOWING";
+      return "following";
     case LineState::kLost:
-      return "LOST";
+      return "lost";
     case LineState::kSearching:
-      return "SEARCHING";
+      return "searching";
     case LineState::kGaveUp:
-      return "GAVE_UP";
+      return "gave_up";
   }
-  return "UNKNOWN";
+  return "unknown";
 }
 
 std::string validate(const SteeringConfig& c) {
