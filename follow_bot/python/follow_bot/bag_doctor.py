@@ -50,6 +50,7 @@ FIT_SAMPLES = 300
 # The line's hue spread in the fit: pixels this far (OpenCV hue) from the histogram's peak.
 HUE_WINDOW = 12
 HUE_MARGIN = 3  # widens the fitted hue range on either side (sensor noise, compression)
+LOWER_MARGIN = 10  # below the line's 2nd percentile of saturation and value: their floor
 
 
 @dataclass
@@ -428,17 +429,29 @@ def jumps(records) -> list[dict]:
 
 
 def worst_frames(records, count=SHEET_FRAMES) -> list[tuple[int, str]]:
-    """Up to `count` frames (index, why), in bag order: the first frame of each lost span
-    (longest first), then the largest jumps."""
-    chosen: dict[int, str] = {}
-    for span in sorted(lost_spans(records), key=lambda s: -s["frames"]):
-        if len(chosen) < (count + 1) // 2 or not jumps(records):
-            chosen.setdefault(span["first_frame"], f"lost {span['frames']} frames")
+    """Up to `count` frames (index, why), in bag order: half of them lost frames (spread evenly
+    over all lost frames), the rest the largest jumps, then more lost frames if jumps run out."""
+    lost = [r["frame"] for r in records if not r["found"]]
+    span_of = {}
+    for span in lost_spans(records):
+        for frame in range(span["first_frame"], span["last_frame"] + 1):
+            span_of[frame] = f"lost ({span['frames']} frames from #{span['first_frame']})"
+
+    def spread(frames, n):
+        if n >= len(frames):
+            return list(frames)
+        return [frames[round(k)] for k in np.linspace(0, len(frames) - 1, n)]
+
+    chosen = {frame: span_of[frame] for frame in spread(lost, (count + 1) // 2)}
     for j in jumps(records):
         if len(chosen) >= count:
             break
         chosen.setdefault(j["frame"], f"jump {j['jump']:.2f}")
-    return sorted(chosen.items())[:count]
+    for frame in spread(lost, count):
+        if len(chosen) >= count:
+            break
+        chosen.setdefault(frame, span_of[frame])
+    return sorted(chosen.items())
 
 
 def summary(records, topics, replay_result) -> dict:
@@ -492,13 +505,16 @@ def plot_timeline(path, records, title, fitted_records=None):
     t = np.array([r["t"] for r in records])
     fig, axes = pyplot.subplots(4, 1, figsize=(9, 7), sharex=True, dpi=72)
     found = np.array([r["found"] for r in records], float)
-    axes[0].fill_between(t, 0, found, step="post", color="tab:green", alpha=0.4, label="found")
+    # Found frames as bars: the replayed parameters' on top, the fitted colours' below.
+    axes[0].fill_between(t, 0.55, 0.55 + 0.45 * found, step="post", color="tab:green", lw=0)
+    ticks, labels = [0.775], ["as set"]
     if fitted_records is not None:
         fitted = np.array([r["found"] for r in fitted_records], float)
-        axes[0].step(t, fitted * 0.5, where="post", color="tab:blue", label="found, fitted colours")
+        axes[0].fill_between(t, 0.0, 0.45 * fitted, step="post", color="tab:blue", lw=0)
+        ticks, labels = [0.225, 0.775], ["fitted", "as set"]
+    axes[0].set_ylim(0, 1)
+    axes[0].set_yticks(ticks, labels)
     axes[0].set_ylabel("found")
-    axes[0].set_yticks([0, 1])
-    axes[0].legend(loc="lower right", fontsize=8)
     position = np.array([np.nan if r["position"] is None else r["position"] for r in records])
     axes[1].plot(t, np.where(found > 0, position, np.nan), ".", ms=3, color="tab:orange")
     axes[1].set_ylabel("position")
@@ -592,14 +608,16 @@ def line_and_floor_pixels(samples) -> tuple[np.ndarray, np.ndarray]:
 
 
 def lower_threshold(line_values, floor_values) -> int:
-    """The t in 0..255 minimising (line values below t) / line + (floor values >= t) / floor:
-    the two-class split of one channel, each class weighted equally."""
-    line_below = np.cumsum(np.bincount(line_values, minlength=256)) / max(len(line_values), 1)
-    floor_at_or_above = 1.0 - np.r_[
-        0.0, np.cumsum(np.bincount(floor_values, minlength=256))[:-1]
-    ] / max(len(floor_values), 1)
-    line_below = np.r_[0.0, line_below[:-1]]  # values < t
-    return int(np.argmin(line_below + floor_at_or_above))
+    """The lower bound of one channel: the t in 0..255 minimising (line values below t) / line
+    + (floor values >= t) / floor, the two-class split with each class weighted equally, but
+    never below the line's 2nd percentile less LOWER_MARGIN (where no floor pixel competes,
+    dark or grey pixels of the right hue, whose hue is noise, stay out)."""
+    line_counts = np.bincount(line_values, minlength=256)[:256]
+    floor_counts = np.bincount(floor_values, minlength=256)[:256]
+    line_below = np.r_[0.0, np.cumsum(line_counts)[:-1]] / max(len(line_values), 1)
+    floor_below = np.r_[0.0, np.cumsum(floor_counts)[:-1]] / max(len(floor_values), 1)
+    split = int(np.argmin(line_below + (1.0 - floor_below)))
+    return max(split, int(np.percentile(line_values, 2)) - LOWER_MARGIN, 0)
 
 
 def fit_line_colours(samples) -> dict | None:
@@ -624,11 +642,65 @@ def fit_line_colours(samples) -> dict | None:
     }
 
 
-def detector_config_with(core, fitted: dict):
+DETECTOR_PARAMS = ("h_min", "h_max", "s_min", "s_max", "v_min", "v_max", "band_distance",
+                   "band_rows", "look_ahead", "look_ahead_distance", "min_pixels",
+                   "blob_chroma_fraction")  # fmt: skip
+STEERING_PARAMS = ("mode", "max_linear", "min_linear", "max_angular")
+PD_PARAMS = ("kp", "kd", "taper", "look_ahead_weight")
+PATH_PARAMS = ("heading_gain", "lateral_gain")
+
+
+def detector_config_with(core, params: dict):
+    """core.LineDetectorConfig of follower ~params (cfg/Follower.cfg names; missing: default),
+    as the follower nodelet maps them."""
     config = core.LineDetectorConfig()
-    config.lower = core.HsvColor(fitted["h_min"], fitted["s_min"], fitted["v_min"])
-    config.upper = core.HsvColor(fitted["h_max"], fitted["s_max"], fitted["v_max"])
+    lower, upper = config.lower, config.upper
+    config.lower = core.HsvColor(
+        params.get("h_min", lower.h), params.get("s_min", lower.s), params.get("v_min", lower.v)
+    )
+    config.upper = core.HsvColor(
+        params.get("h_max", upper.h), params.get("s_max", upper.s), params.get("v_max", upper.v)
+    )
+    rows = params.get("band_rows", config.band.rows)
+    distance = params.get("band_distance", config.band.distance_m)
+    config.band = core.BandConfig(distance_m=distance, rows=rows)
+    ahead = params.get("look_ahead_distance", config.look_ahead.distance_m)
+    config.look_ahead = core.BandConfig(distance_m=ahead, rows=rows)
+    config.look_ahead_enabled = params.get("look_ahead", config.look_ahead_enabled)
+    config.min_pixels = params.get("min_pixels", config.min_pixels)
+    config.blob_chroma_fraction = params.get("blob_chroma_fraction", config.blob_chroma_fraction)
     return config
+
+
+def steering_config_with(core, params: dict):
+    """core.SteeringConfig of follower ~params, as the follower nodelet maps them."""
+    config = core.SteeringConfig()
+    for name in STEERING_PARAMS:
+        if name in params:
+            setattr(config, name, params[name])
+    pd, path, search = config.pd, config.path, config.search
+    for name in PD_PARAMS:
+        if name in params:
+            setattr(pd, name, params[name])
+    for name in PATH_PARAMS:
+        if name in params:
+            setattr(path, name, params[name])
+    if "search_rate" in params:
+        search.search_rate = params["search_rate"]
+    config.pd, config.path, config.search = pd, path, search
+    return config
+
+
+def load_params(path) -> dict:
+    """The follower ~params in a YAML file (unknown names: ValueError naming them)."""
+    import yaml
+
+    params = yaml.safe_load(Path(path).read_text()) or {}
+    known = {*DETECTOR_PARAMS, *STEERING_PARAMS, *PD_PARAMS, *PATH_PARAMS, "search_rate"}
+    unknown = sorted(set(params) - known)
+    if unknown:
+        raise ValueError(f"{path}: not follower parameters: {', '.join(unknown)}")
+    return params
 
 
 def write_params(path, fitted: dict, comment: str):
@@ -655,6 +727,12 @@ def parse_args(argv):
         "--fit-colours",
         action="store_true",
         help="fit the line's colour band to the bag (follower) and write " "fitted_params.yaml",
+    )
+    parser.add_argument(
+        "--params",
+        type=Path,
+        help="a YAML of the follower's ~params (cfg/Follower.cfg names, e.g. a fitted_params.yaml) "
+        "to replay with instead of the defaults",
     )
     parser.add_argument("--image-topic", help="default: the bag's busiest image topic")
     parser.add_argument("--cmd-vel-topic", help="default: the bag's busiest Twist topic")
@@ -695,11 +773,16 @@ def bag_mounting(bag_path, topics, args):
     return found, source
 
 
-def make_replay(core, behaviour, mounting, detector_config=None):
+def make_replay(core, behaviour, mounting, params=None):
+    """make_behaviour(camera_info, frame shape) for replay(); `params`: follower ~params."""
+
     def make(info, shape):
         camera = camera_from(core, info, shape, mounting)
         if behaviour == "follower":
-            return FollowerReplay(core, camera, detector_config)
+            return FollowerReplay(
+                core, camera, detector_config_with(core, params or {}),
+                steering_config_with(core, params or {}),
+            )  # fmt: skip
         if behaviour == "beacons":
             return BeaconsReplay(core, camera)
         return ParkerReplay(core, camera)
@@ -718,13 +801,20 @@ def inspect(bag_path, out, behaviour="follower", fit_colours=False, args=None) -
     with rosbag.Bag(str(bag_path)) as bag:
         topics = pick_topics(bag, args.image_topic, args.cmd_vel_topic)
     mounting, mounting_source = bag_mounting(bag_path, topics, args)
+    params = load_params(args.params) if args.params else {}
+    if params and behaviour != "follower":
+        raise ValueError("--params are the follower's")
     sample_every = max(1, math.ceil(topics.frames / FIT_SAMPLES)) if fit_colours else 0
     first, replayed = replay(
-        core, bag_path, topics, make_replay(core, behaviour, mounting), (), sample_every
+        core, bag_path, topics, make_replay(core, behaviour, mounting, params), (), sample_every
     )
     chosen = worst_frames(first.records, args.sheet_frames)
     second, _ = replay(
-        core, bag_path, topics, make_replay(core, behaviour, mounting), {i for i, _ in chosen}
+        core,
+        bag_path,
+        topics,
+        make_replay(core, behaviour, mounting, params),
+        {i for i, _ in chosen},
     )
     figures = {
         "bag": str(bag_path),
@@ -753,9 +843,8 @@ def inspect(bag_path, out, behaviour="follower", fit_colours=False, args=None) -
         if fitted is None:
             fit["error"] = "no line-coloured pixels stand out of the floor in the band"
         else:
-            config = detector_config_with(core, fitted)
             after, _ = replay(
-                core, bag_path, topics, make_replay(core, behaviour, mounting, config)
+                core, bag_path, topics, make_replay(core, behaviour, mounting, {**params, **fitted})
             )
             fitted_records = after.records
             rate = sum(r["found"] for r in after.records) / len(after.records)
@@ -819,3 +908,7 @@ def main(argv=None) -> int:
             )
     print(f"report: {out}/report.json, timeline.png, worst_frames.png")
     return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
