@@ -223,6 +223,47 @@ def test_fit_colours_finds_the_line_under_a_colour_cast(lap, tmp_path):
     assert refit["detection_rate"] == fit["detection_rate_after"]
     assert agree >= len(poses) - 2 and errors.max() < 0.02
     assert "->" in stdout
+    # follower.launch takes the file as it is (params:=).
+    dump = subprocess.run(
+        ["roslaunch", "--dump-params", "follow_bot", "follower.launch", f"params:={fitted_file}",
+         "robot_description:=false"], capture_output=True, text=True, timeout=60, check=True,
+    )  # fmt: skip
+    assert yaml.safe_load(dump.stdout)["/follower/h_min"] == params["h_min"]
+
+
+# The real photographs with a colour cast (../shared/realdata/line_colour_cast, 1080x810, no
+# calibration: the band lands on rows ~612-632), labelled by looking at rows 592-652: the yellow
+# dash's columns there, or None where no line crosses the band.
+CAST_PHOTOS = {
+    "pic1_smaller": (55, 125),  # warm cast; the dash ends inside the band
+    "pic2_smaller": (65, 170),  # warm cast
+    "pic4_smaller": (0, 100),
+    "pic5_smaller": None,  # cool cast; the centre line is far ahead, above the band
+}
+
+
+def test_fit_colours_keeps_the_real_line(realdata, tmp_path):
+    # Frames the default band already reads: the fit must not lose them or find a line where
+    # there is none.
+    bag = tmp_path / "photos.bag"
+    with rosbag.Bag(str(bag), "w") as out:
+        for i, name in enumerate(CAST_PHOTOS):
+            msg = CompressedImage(format="jpeg")
+            msg.data = (realdata / "line_colour_cast" / f"{name}.jpg").read_bytes()
+            msg.header.stamp = rospy.Time.from_sec(1.0 + i / 5)
+            out.write("/raspicam_node/image/compressed", msg, msg.header.stamp)
+    report, _ = inspect(bag, tmp_path / "report", "--fit-colours")
+    fitted_file = tmp_path / "report" / "fitted_params.yaml"
+    refit, _ = inspect(bag, tmp_path / "refit", "--params", str(fitted_file))
+    fit = report["fit"]
+    print(f"photos: detection rate {fit['detection_rate_before']} -> "
+          f"{fit['detection_rate_after']}, fitted {fit['parameters']}")  # fmt: skip
+    assert fit["detection_rate_before"] == fit["detection_rate_after"] == 0.75
+    for replayed in (report, refit):
+        for record, label in zip(replayed["records"], CAST_PHOTOS.values(), strict=True):
+            assert record["found"] == (label is not None)
+            if label:
+                assert label[0] <= 540 * (1 + record["position"]) <= label[1]
 
 
 def test_real_raspicam_bags_decode_and_report(realdata, tmp_path):
@@ -231,7 +272,7 @@ def test_real_raspicam_bags_decode_and_report(realdata, tmp_path):
     runs = [(bag, "follower") for bag in bags] + [(bags[0], "beacons"), (bags[0], "parker")]
     for bag, behaviour in runs:
         out = tmp_path / f"{bag.stem}_{behaviour}"
-        report, _ = inspect(bag, out, "--behaviour", behaviour)
+        report = bag_doctor.inspect(bag, out, behaviour)  # in this process: 5 runs, 1 import
         # One 1280-wide frame each, decoded ("jpg"), with its own calibration.
         assert report["frames"] == 1 and report["undecodable_frames"] == {}
         assert report["image_type"] == "sensor_msgs/CompressedImage"
