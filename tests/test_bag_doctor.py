@@ -26,6 +26,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from tf2_msgs.msg import TFMessage
 
 from follow_bot import bag_doctor, core
+from harness.realism import PROFILES, realism_from
 from harness.render import Renderer
 from harness.world import WORLDS_DIR, load_world
 
@@ -128,10 +129,14 @@ def cv2_jpeg(frame):
     return data.tobytes()
 
 
-@pytest.fixture(scope="module")
-def lap():
+def make_lap(profile):
+    """The renderer (clean with noise, or the harness's realistic profile), the lap's poses and
+    each frame's truth (band_truth)."""
     world = load_world(WORLDS_DIR / "course.yaml")
-    renderer = Renderer(world, noise_sigma=3.0)
+    if profile == "realistic":
+        renderer = Renderer(world, noise_sigma=0.0, realism=realism_from(PROFILES["realistic"]))
+    else:
+        renderer = Renderer(world, noise_sigma=3.0)
     poses = lap_poses(world)
     camera = renderer.camera
     geometry = core.CameraGeometry(
@@ -142,6 +147,11 @@ def lap():
     rows = (placed.row_begin, placed.row_end)
     truth = [band_truth(camera, world.centreline(0), pose, rows) for pose in poses]
     return renderer, poses, truth
+
+
+@pytest.fixture(scope="module")
+def lap():
+    return make_lap("clean")
 
 
 def inspect(bag, out, *options):
@@ -165,14 +175,17 @@ def compare(records, truth):
     return agree, np.array(errors)
 
 
-def test_lap_report_matches_the_renderer(lap, tmp_path):
-    renderer, poses, truth = lap
+@pytest.mark.parametrize("profile", ["clean", "realistic"])
+def test_lap_report_matches_the_renderer(profile, tmp_path):
+    # realistic: tiles, shadows, walls, yellow tape and a yellow box near the line, white
+    # balance and exposure drift, vignetting, motion blur, JPEG 60 (harness/realism.py).
+    renderer, poses, truth = make_lap(profile)
     bag = tmp_path / "lap.bag"
-    write_lap_bag(bag, renderer, poses)
+    write_lap_bag(bag, renderer, poses, compressed=profile == "realistic")
     report, stdout = inspect(bag, tmp_path / "report")
     records = report["records"]
     assert report["frames"] == len(poses) == len(records)
-    assert report["image_topic"] == "camera/rgb/image_raw"
+    assert report["image_topic"].startswith("camera/rgb/image_raw")
     # The mounting from tf_static: the world's camera (0.30 m up, 20 deg down).
     mounting = report["camera"]
     assert mounting["mounting"] == "tf_static"
@@ -180,7 +193,7 @@ def test_lap_report_matches_the_renderer(lap, tmp_path):
     assert mounting["pitch_deg"] == pytest.approx(math.degrees(renderer.camera.pitch), abs=0.01)
     visible = sum(t is not None for t in truth)
     agree, errors = compare(records, truth)
-    print(f"lap: {len(poses)} frames, line in the band {visible}, doctor found "
+    print(f"lap, {profile}: {len(poses)} frames, line in the band {visible}, doctor found "
           f"{sum(r['found'] for r in records)}, agree {agree}, |position - truth| median "
           f"{np.median(errors):.4f} max {errors.max():.4f}")  # fmt: skip
     assert visible >= 0.9 * len(poses)
