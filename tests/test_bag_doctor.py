@@ -182,7 +182,7 @@ def test_lap_report_matches_the_renderer(profile, tmp_path):
     renderer, poses, truth = make_lap(profile)
     bag = tmp_path / "lap.bag"
     write_lap_bag(bag, renderer, poses, compressed=profile == "realistic")
-    report, stdout = inspect(bag, tmp_path / "report")
+    report, stdout = inspect(bag, tmp_path / "report", "--fit-colours")
     records = report["records"]
     assert report["frames"] == len(poses) == len(records)
     assert report["image_topic"].startswith("camera/rgb/image_raw")
@@ -208,6 +208,11 @@ def test_lap_report_matches_the_renderer(profile, tmp_path):
     for name in ("timeline.png", "worst_frames.png"):
         assert (tmp_path / "report" / name).stat().st_size > 10_000
     assert "detection rate" in stdout
+    # The colours fitted to a lap the default band reads: no frame lost (a shadow band darkens
+    # the line in three of the realistic lap's frames: the value bound keeps them).
+    fit = report["fit"]
+    print(f"fit: {fit['parameters']}, detection rate {fit['detection_rate_after']}")
+    assert fit["detection_rate_after"] == report["detection_rate"] and fit["better"]
 
 
 def test_fit_colours_finds_the_line_under_a_colour_cast(lap, tmp_path):
@@ -220,6 +225,7 @@ def test_fit_colours_finds_the_line_under_a_colour_cast(lap, tmp_path):
           f"{fit['detection_rate_after']}, fitted {fit['parameters']}")  # fmt: skip
     assert report["image_type"] == "sensor_msgs/CompressedImage"
     assert fit["detection_rate_before"] < 0.2  # the default band (hue 20-30) misses the line
+    assert fit["better"]
     visible = sum(t is not None for t in truth) / len(poses)
     assert fit["detection_rate_after"] >= visible - 2 / len(poses)
     params = yaml.safe_load((tmp_path / "report" / "fitted_params.yaml").read_text())

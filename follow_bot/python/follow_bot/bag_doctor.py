@@ -51,6 +51,10 @@ FIT_SAMPLES = 300
 HUE_WINDOW = 12
 HUE_MARGIN = 3  # widens the fitted hue range on either side (sensor noise, compression)
 LOWER_MARGIN = 10  # below the line's 2nd percentile of saturation and value: their floor
+LINE_KEPT = 0.8  # the fraction of the line's pixels in each frame the value bound keeps
+MIN_LINE_PIXELS = (
+    30  # line pixels in a sampled band for it to bound the fit (the min_pixels default)
+)
 
 
 @dataclass
@@ -577,8 +581,9 @@ def contact_sheet(path, behaviour, kept, chosen, records, columns=2):
 # ---- the colour fit ----------------------------------------------------------------------------
 
 
-def line_and_floor_pixels(samples) -> tuple[np.ndarray, np.ndarray]:
-    """HSV pixels (Nx3) of the line and of the floor in the sampled bands. The line: pixels the
+def line_and_floor_pixels(samples) -> tuple[list[np.ndarray], np.ndarray]:
+    """HSV pixels of the line (Nx3 per sampled band) and of the floor (Nx3, all bands). The
+    line: pixels the
     default band finds in confident frames, and in every frame the band's colour outliers (Otsu
     on the a*b* distance from the band's median colour) near the outliers' hue histogram peak."""
     outliers_hsv, line, floor = [], [], []
@@ -595,7 +600,7 @@ def line_and_floor_pixels(samples) -> tuple[np.ndarray, np.ndarray]:
         outliers_hsv.append((hsv, outlier, confident))
     candidates = np.vstack([h[o] for h, o, _ in outliers_hsv]) if outliers_hsv else np.empty((0, 3))
     if len(candidates) == 0:
-        return np.empty((0, 3), np.uint8), np.empty((0, 3), np.uint8)
+        return [], np.empty((0, 3), np.uint8)
     histogram = np.bincount(candidates[:, 0], weights=candidates[:, 1].astype(float), minlength=180)
     histogram = np.convolve(np.r_[histogram[-2:], histogram, histogram[:2]], np.ones(5), "valid")
     peak = int(np.argmax(histogram))
@@ -604,42 +609,50 @@ def line_and_floor_pixels(samples) -> tuple[np.ndarray, np.ndarray]:
         is_line = confident | (outlier & (hue_distance <= HUE_WINDOW))
         line.append(hsv[is_line])
         floor.append(hsv[~is_line & ~outlier])
-    return np.vstack(line), np.vstack(floor)
+    return line, np.vstack(floor)
 
 
-def lower_threshold(line_values, floor_values) -> int:
+def lower_threshold(line_values, floor_values, highest: int = 255) -> int:
     """The lower bound of one channel: the t in 0..255 minimising (line values below t) / line
-    + (floor values >= t) / floor, the two-class split with each class weighted equally, but
-    never below the line's 2nd percentile less LOWER_MARGIN (where no floor pixel competes,
-    dark or grey pixels of the right hue, whose hue is noise, stay out)."""
+    + (floor values >= t) / floor, the two-class split with each class weighted equally; but no
+    higher than `highest`, and, where no floor pixel competes, the line's 2nd percentile less
+    LOWER_MARGIN (dark or grey pixels of the right hue, whose hue is noise, stay out)."""
     line_counts = np.bincount(line_values, minlength=256)[:256]
     floor_counts = np.bincount(floor_values, minlength=256)[:256]
     line_below = np.r_[0.0, np.cumsum(line_counts)[:-1]] / max(len(line_values), 1)
     floor_below = np.r_[0.0, np.cumsum(floor_counts)[:-1]] / max(len(floor_values), 1)
     split = int(np.argmin(line_below + (1.0 - floor_below)))
-    return max(split, int(np.percentile(line_values, 2)) - LOWER_MARGIN, 0)
+    return max(min(split, highest), int(np.percentile(line_values, 2)) - LOWER_MARGIN, 0)
+
+
+def kept_in_every_frame(per_frame, channel) -> int:
+    """The highest lower bound on `channel` that keeps LINE_KEPT of the line's pixels in every
+    sampled band with a line: a line in a shadow in a few frames is still the line."""
+    frames = [f[:, channel] for f in per_frame if len(f) >= MIN_LINE_PIXELS]
+    return int(min((np.percentile(f, 100 * (1 - LINE_KEPT)) for f in frames), default=255))
 
 
 def fit_line_colours(samples) -> dict | None:
     """h_min, h_max, s_min, s_max, v_min, v_max (cfg/Follower.cfg's names) fitted to the sampled
     bands, or None when no line-coloured pixels stand out."""
-    line, floor = line_and_floor_pixels(samples)
-    if len(line) < 50:
+    per_frame, floor = line_and_floor_pixels(samples)
+    if sum(len(f) >= MIN_LINE_PIXELS for f in per_frame) == 0:
         return None
+    line = np.vstack(per_frame)
     h_min, h_max = np.percentile(line[:, 0], [1, 99])
     h_min, h_max = max(0, int(h_min) - HUE_MARGIN), min(179, int(math.ceil(h_max)) + HUE_MARGIN)
     in_hue = (floor[:, 0] >= h_min) & (floor[:, 0] <= h_max)
+    # Saturation: the split alone (paint keeps its saturation in a shadow, and a white line a
+    # cast tints is among the outliers, low in saturation); value: no higher than what keeps the
+    # line in every frame (a shadowed line is darker).
     s_min = lower_threshold(line[:, 1], floor[in_hue, 1])
     in_box = in_hue & (floor[:, 1] >= s_min)
-    v_min = lower_threshold(line[line[:, 1] >= s_min, 2], floor[in_box, 2])
+    saturated = [f[f[:, 1] >= s_min] for f in per_frame]
+    v_highest = kept_in_every_frame(saturated, 2)
+    v_min = lower_threshold(line[line[:, 1] >= s_min, 2], floor[in_box, 2], v_highest)
     return {
-        "h_min": h_min,
-        "h_max": h_max,
-        "s_min": s_min,
-        "s_max": 255,
-        "v_min": v_min,
-        "v_max": 255,
-    }
+        "h_min": h_min, "h_max": h_max, "s_min": s_min, "s_max": 255, "v_min": v_min, "v_max": 255,
+    }  # fmt: skip
 
 
 DETECTOR_PARAMS = ("h_min", "h_max", "s_min", "s_max", "v_min", "v_max", "band_distance",
@@ -849,6 +862,8 @@ def inspect(bag_path, out, behaviour="follower", fit_colours=False, args=None) -
             fitted_records = after.records
             rate = sum(r["found"] for r in after.records) / len(after.records)
             fit.update(parameters=fitted, detection_rate_after=round(rate, 4))
+            # A band that finds the line in fewer frames than the one replayed is no advice.
+            fit["better"] = rate >= figures["detection_rate"]
             fit["file"] = str(out / "fitted_params.yaml")
             write_params(
                 fit["file"],
@@ -902,6 +917,8 @@ def main(argv=None) -> int:
         if "error" in fit:
             print(f"colour fit: {fit['error']}")
         else:
+            if not fit["better"]:
+                print("colour fit: WORSE than the parameters replayed; keep yours")
             print(
                 f"colour fit: detection rate {fit['detection_rate_before']:.3f} -> "
                 f"{fit['detection_rate_after']:.3f}; {fit['parameters']} in {fit['file']}"
