@@ -22,6 +22,7 @@ import rosbag
 import rospy
 import yaml
 from geometry_msgs.msg import TransformStamped, Twist
+from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from tf2_msgs.msg import TFMessage
 
@@ -86,7 +87,7 @@ def quaternion(r):
 def write_lap_bag(path, renderer, poses, cast=None, compressed=False):
     """The frames at `poses` as a robot's recording: camera frames (raw bgr8, or JPEG with
     the raspicam's "jpg" format string), camera_info, tf_static and the cmd_vel that drove
-    the robot from pose to pose."""
+    the robot from pose to pose, and /odom saying it did."""
     camera = renderer.camera
     info_fields = camera.camera_info_dict()
     with rosbag.Bag(str(path), "w") as bag:
@@ -119,6 +120,9 @@ def write_lap_bag(path, renderer, poses, cast=None, compressed=False):
             command.linear.x = math.dist(pose[:2], nxt[:2]) * RATE_HZ
             command.angular.z = math.remainder(nxt[2] - pose[2], math.tau) * RATE_HZ
             bag.write("/cmd_vel", command, stamp)
+            odom = Odometry()
+            odom.header.stamp, odom.twist.twist = stamp, command
+            bag.write("/odom", odom, stamp)
 
 
 def cv2_jpeg(frame):
@@ -204,6 +208,7 @@ def test_lap_report_matches_the_renderer(profile, tmp_path):
     assert np.median(errors) < 0.01 and errors.max() < 0.02
     # The bag's commands (the weave) against the core's: every frame after the first command.
     assert report["commands"]["frames_with_a_bag_command"] == len(poses) - 1
+    assert report["applied_from"] == "/odom"
     assert all("core_w" in r and "bag_w" in r for r in records[1:])
     for name in ("timeline.png", "worst_frames.png"):
         assert (tmp_path / "report" / name).stat().st_size > 10_000

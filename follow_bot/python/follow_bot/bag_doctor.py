@@ -467,6 +467,9 @@ def summary(records, topics, replay_result) -> dict:
         "image_topic": topics.image,
         "image_type": topics.image_type,
         "camera_info": topics.camera_info,
+        # What the robot did between frames (the path law's motion), as the node: odom's
+        # twist, else the commands the core sent.
+        "applied_from": topics.odom or "the core's commands",
         "frames": len(records),
         "undecodable_frames": replay_result.decode_errors,
         "duration_s": round(duration, 3),
