@@ -11,10 +11,12 @@
 - Under Debian's python3 without OpenCV, --help works and a run says what to install.
 """
 
+import ast
 import json
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -307,6 +309,11 @@ def test_real_raspicam_bags_decode_and_report(realdata, tmp_path):
 
 
 def test_help_and_missing_libraries_under_debian_python(tmp_path):
+    # A product tool: the harness depends on follow_bot, never the reverse.
+    tree = ast.parse(Path(bag_doctor.__file__).read_text())
+    imported = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    imported |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)}
+    assert not any(name.split(".")[0] == "harness" for name in imported)
     script = ["/usr/bin/python3", "-m", "follow_bot.bag_doctor"]
     help_run = subprocess.run([*script, "--help"], capture_output=True, text=True, timeout=60)
     assert help_run.returncode == 0 and "--fit-colours" in help_run.stdout
