@@ -16,10 +16,13 @@ MANIFESTS = sorted(REPO.glob("*/package.xml"))
 SYSTEM_MANIFESTS = Path("/usr/share")
 # System keys that no installed ROS package depends on, checked by hand: visp and apriltag are
 # rosdep keys (the library's Debian packages libvisp-dev and libapriltag-dev are not);
-# pybind11-dev and python3-dev are rosdep/base.yaml and python.yaml keys of ros/rosdistro.
+# pybind11-dev, python3-dev, python3-opencv and python3-matplotlib are rosdep/base.yaml and
+# python.yaml keys of ros/rosdistro.
 # The other system keys are ones a ROS package Debian ships depends on itself (cv_bridge on
 # libopencv-dev, boost, python3-numpy, ...): keys its rosdep resolves by construction.
-SYSTEM_KEYS = {"apriltag", "visp", "pybind11-dev", "python3-dev"}
+SYSTEM_KEYS = {
+    "apriltag", "visp", "pybind11-dev", "python3-dev", "python3-opencv", "python3-matplotlib",
+}  # fmt: skip
 
 
 @pytest.mark.parametrize("path", LAUNCH_FILES, ids=lambda p: str(p.relative_to(REPO)))
