@@ -320,8 +320,9 @@ def runner_criteria(
     world_path: Path, lockstep: bool, robot: str | None = None
 ) -> dict[str, Criterion]:
     """What every run must meet, whatever its file says: finite commands within the world
-    robot's limits (the robot preset's, with `robot`) and, in lockstep, exactly one reply (the
-    behaviour's status) to every frame."""
+    robot's limits (with `robot`, the preset's speed and acceleration limits, which its launch
+    gives the behaviour) and, in lockstep, exactly one reply (the behaviour's status) to every
+    frame."""
     world = load_world(world_path)
     base = (robot_world(world, robot) if robot else world).robot
     rules = [
@@ -329,6 +330,11 @@ def runner_criteria(
         Criterion("commands.max_abs_v", maximum=base.max_v),
         Criterion("commands.max_abs_w", maximum=base.max_w),
     ]
+    limits = preset(robot).get("limits", {}) if robot else {}
+    for metric, limit in (("max_abs_dv_dt", "limit_linear_accel"),
+                          ("max_abs_dw_dt", "limit_angular_accel")):  # fmt: skip
+        if limit in limits:
+            rules.append(Criterion(f"commands.{metric}", maximum=limits[limit]))
     if lockstep:
         rules += [Criterion("replies.missing", equals=0), Criterion("replies.extra", equals=0)]
     return {c.metric: c for c in rules}
