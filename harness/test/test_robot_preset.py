@@ -26,7 +26,8 @@ def test_the_waffle_pi_camera_and_limits_replace_the_worlds():
     bounds = {c.metric: c.maximum for c in scenario.criteria}
     assert bounds["commands.max_abs_v"] == 0.26 and bounds["commands.max_abs_w"] == 1.82
     # turtlebot3_navigation's dwa_local_planner_params_waffle_pi.yaml
-    assert bounds["commands.max_abs_dv_dt"] == 2.5 and bounds["commands.max_abs_dw_dt"] == 3.2
+    assert bounds["commands.max_abs_dv_dt"] == pytest.approx(2.5, rel=1e-5)
+    assert bounds["commands.max_abs_dw_dt"] == pytest.approx(3.2, rel=1e-5)
     assert camera_topics("turtlebot3_waffle_pi") == ("raspicam_node/image",
                                                      "raspicam_node/camera_info")  # fmt: skip
 
