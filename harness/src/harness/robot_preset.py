@@ -1,19 +1,27 @@
 """A robot preset (follow_bot/config/robots.yaml, read by follow_bot.robot_description) played
 by the simulator: the preset's camera (size, lens, mounting, frame, transport, topics) and its
 base's speed limits replace the world's, so a scenario drives the robot the launch files set up
-for `robot:=NAME`."""
+for `robot:=NAME`. Without a robot (or generic) follow_bot is not imported: an installed harness
+plays worlds' own cameras without it."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
 
-from follow_bot.robot_description import preset
 from harness.world import CameraTransport, World
 
-# The preset that fixes no camera in the simulator: a world's own camera plays it, on its topics
-# (the lecture's).
+# The preset that fixes no camera in the simulator: a world's own camera plays it, on the topics
+# the behaviours subscribe to by their own names.
 GENERIC = "generic"
+OWN_TOPICS = ("camera/rgb/image_raw", "camera/rgb/camera_info")
+
+
+def preset(name: str) -> dict:
+    """The robot preset `name`; ValueError naming the presets when there is none."""
+    from follow_bot.robot_description import preset as follow_bot_preset
+
+    return follow_bot_preset(name)
 
 
 def robot_world(world: World, name: str) -> World:
@@ -37,8 +45,11 @@ def robot_world(world: World, name: str) -> World:
 
 
 def camera_topics(name: str | None) -> tuple[str, str]:
-    """The image (image_transport base) and camera_info topics of robot `name` (None: generic)."""
-    p = preset(name or GENERIC)
+    """The image (image_transport base) and camera_info topics of robot `name` (None or generic:
+    the behaviours' own names)."""
+    if name in (None, GENERIC):
+        return OWN_TOPICS
+    p = preset(name)
     return p["image"], p["camera_info"]
 
 

@@ -22,11 +22,10 @@ from typing import Any
 import numpy as np
 import yaml
 
-from follow_bot.robot_description import preset
 from harness import scoring
 from harness.camera import Camera
 from harness.realism import parse_realism
-from harness.robot_preset import frame_rate, robot_world
+from harness.robot_preset import GENERIC, frame_rate, preset, robot_world
 from harness.simulation import Perturbations
 from harness.sweep import draw, member_name, parse_sweep
 from harness.validation import (
@@ -335,7 +334,7 @@ def runner_criteria(
         Criterion("commands.max_abs_v", maximum=base.max_v),
         Criterion("commands.max_abs_w", maximum=base.max_w),
     ]
-    limits = preset(robot).get("limits", {}) if robot else {}
+    limits = preset(robot).get("limits", {}) if robot not in (None, GENERIC) else {}
     for metric, limit in (("max_abs_dv_dt", "limit_linear_accel"),
                           ("max_abs_dw_dt", "limit_angular_accel")):  # fmt: skip
         if limit in limits:  # the limiter's dt is of whole-nanosecond stamps, the metric's not
