@@ -1,6 +1,7 @@
 """`rosrun follow_bot robot_description`: the robot's URDF without xacro (Debian packages none), a
 base with one camera, from a robot preset (config/robots.yaml) and any mounting flags over it.
-Standard library only, so robot_description.launch runs on Debian's python3 alone.
+Debian's python3 and its ROS packages only (no numpy, no cv2), so robot_description.launch runs
+without the harness venv.
 
 Frames (REP 103/105/120): base_footprint on the floor under the robot's centre; base_link
 BASE_LINK_HEIGHT above it; camera_link at the camera's optical centre, x forward, pitched down by
