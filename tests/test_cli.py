@@ -28,6 +28,7 @@ TOOLS = {
     "parker": ["rosrun", "follow_bot", "parker"],
     "panorama": ["rosrun", "follow_bot", "panorama"],
     "image_converter": ["rosrun", "image_converter", "image_converter"],
+    "robot_description": ["rosrun", "follow_bot", "robot_description"],
 }
 NODES = ["follower", "beacon_chaser", "parker", "panorama", "image_converter"]
 
@@ -52,6 +53,7 @@ def run(args: list[str]) -> subprocess.CompletedProcess:
         ("run_scenario", "--help"),
         ("constant_twist", "--help"),
         ("image_stream_demo", "--help"),
+        ("robot_description", "--help"),
         *[(node, flag) for node in NODES for flag in ("--help", "-h")],
     ],
 )
@@ -99,6 +101,7 @@ def test_a_node_help_names_its_topics_and_its_manual(node):
         ("core_call_timer", ["--sign"], "--sign needs the sign's IMAGE and width W (m)"),
         ("sim", ["--frob"], "sim: error: unrecognized arguments: --frob"),
         ("run_scenario", ["--frob"], "error: "),  # its prog name is the scenarios owner's
+        ("robot_description", ["--robot", "turtlebot4"], "unknown robot 'turtlebot4': one of"),
     ],
 )
 def test_bad_usage_exits_2_with_the_usage_on_stderr(tool, args, problem):

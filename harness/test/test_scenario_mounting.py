@@ -25,7 +25,10 @@ def test_the_description_carries_the_runs_camera():
     course = load_world(WORLDS / "course.yaml").camera
     command = description_command(course)
     assert command[:4] == ["roslaunch", "--wait", "follow_bot", "robot_description.launch"]
-    assert command[4:] == ["camera_height:=0.3", "camera_pitch_deg:=20.0", "camera_x_offset:=0.0"]
+    assert command[4:] == [
+        "camera_height:=0.3", "camera_pitch_deg:=20.0", "camera_x_offset:=0.0",
+        "camera_frame:=camera_rgb_optical_frame",
+    ]  # fmt: skip
     assert description_command(load_world(WORLDS / "parking.yaml").camera)[5] == (
         "camera_pitch_deg:=0.0"
     )

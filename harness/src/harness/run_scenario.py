@@ -141,6 +141,8 @@ def behaviour_command(scenario: Scenario) -> list[str]:
     # The run's robot description comes from its world (description_command), not the launch's:
     # the node under test finds its camera's mounting in tf, as on a robot, never in ~params.
     args = {"robot_description": "false", **b.args}
+    if scenario.robot:  # the launch file sets the robot's topics, transport and limits
+        args.setdefault("robot", scenario.robot)
     if scenario.lockstep and "wall_watchdog_timeout" in declared_args(b.package, b.launch_file):
         # The simulator holds /clock while it renders a step, which on a loaded machine can take
         # longer than the behaviours' wall-clock watchdog (0.15 s): a slow step is not a dead
@@ -157,6 +159,7 @@ def description_command(camera: Camera) -> list[str]:
         "camera_height": camera.height_m,
         "camera_pitch_deg": round(math.degrees(camera.pitch), 9),
         "camera_x_offset": camera.x_offset_m,
+        "camera_frame": camera.frame_id,
     }
     launch = ["roslaunch", "--wait", "follow_bot", "robot_description.launch"]
     return launch + [f"{k}:={v}" for k, v in mounting.items()]

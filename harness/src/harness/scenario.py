@@ -25,6 +25,7 @@ import yaml
 from harness import scoring
 from harness.camera import Camera
 from harness.realism import parse_realism
+from harness.robot_preset import GENERIC, frame_rate, preset, robot_world
 from harness.simulation import Perturbations
 from harness.sweep import draw, member_name, parse_sweep
 from harness.validation import (
@@ -175,6 +176,7 @@ class Scenario:
     seed: int | None = None  # seeds the pixel noise (None: the world's noise seed)
     camera_transport: CameraTransport | None = None  # None: the world's
     camera_mounting: CameraMounting = field(default_factory=CameraMounting)  # over the world's
+    robot: str | None = None  # a robot preset whose camera and limits replace the world's
     source: Path | None = None
     spec: dict = field(default_factory=dict, compare=False)  # the run's own fields, as parsed
     parameters: dict = field(default_factory=dict, compare=False)  # a sweep member's draws
@@ -195,6 +197,15 @@ class Scenario:
             if c.metric.split(".")[-1] == "still_since" and c.maximum is not None
         ]  # fmt: skip
         return max([STILL_STOP_S, *(self.duration - bound for bound in bounds)])
+
+
+def _robot_name(value: Any, where: str) -> str:
+    name = string(value, where)
+    try:
+        preset(name)
+    except ValueError as error:
+        raise ScenarioError(f"{where}: {error}") from None
+    return name
 
 
 def _world_file(value: Any, where: str, base: Path) -> Path:
@@ -324,15 +335,31 @@ def _start_pose(value: Any, where: str, world_path: Path) -> tuple[float, float,
     return (x, y, math.remainder(math.atan2(cy - y, cx - x) - bearing, math.tau))
 
 
-def runner_criteria(world_path: Path, lockstep: bool) -> dict[str, Criterion]:
+# Relative slack of the acceleration bounds: a command limited to accel * dt over stamps rounded to
+# the nanosecond measures up to ~2e-8 above accel over the simulator's exact step.
+ACCEL_ROUNDING = 1e-6
+
+
+def runner_criteria(
+    world_path: Path, lockstep: bool, robot: str | None = None
+) -> dict[str, Criterion]:
     """What every run must meet, whatever its file says: finite commands within the world
-    robot's limits and, in lockstep, exactly one reply (the behaviour's status) to every frame."""
-    robot = load_world(world_path).robot
+    robot's limits (with `robot`, the preset's speed and acceleration limits, which its launch
+    gives the behaviour) and, in lockstep, exactly one reply (the behaviour's status) to every
+    frame."""
+    world = load_world(world_path)
+    base = (robot_world(world, robot) if robot else world).robot
     rules = [
         Criterion("commands.non_finite", equals=0),
-        Criterion("commands.max_abs_v", maximum=robot.max_v),
-        Criterion("commands.max_abs_w", maximum=robot.max_w),
+        Criterion("commands.max_abs_v", maximum=base.max_v),
+        Criterion("commands.max_abs_w", maximum=base.max_w),
     ]
+    limits = preset(robot).get("limits", {}) if robot not in (None, GENERIC) else {}
+    for metric, limit in (("max_abs_dv_dt", "limit_linear_accel"),
+                          ("max_abs_dw_dt", "limit_angular_accel")):  # fmt: skip
+        if limit in limits:  # the limiter's dt is of whole-nanosecond stamps, the metric's not
+            bound = limits[limit] * (1.0 + ACCEL_ROUNDING)
+            rules.append(Criterion(f"commands.{metric}", maximum=bound))
     if lockstep:
         rules += [Criterion("replies.missing", equals=0), Criterion("replies.extra", equals=0)]
     return {c.metric: c for c in rules}
@@ -343,7 +370,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
     allowed = {
         "name", "world", "start", "behaviour", "driver", "rate_hz", "duration", "stop_when",
         "lockstep", "reply_timeout", "perturbations", "target", "watch", "goal", "standoff",
-        "criteria", "regression", "seed", "camera_transport", "camera_mounting",
+        "criteria", "regression", "seed", "camera_transport", "camera_mounting", "robot",
     }  # fmt: skip
     try:
         f = Fields(data, "", allowed)
@@ -357,7 +384,8 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             raise ScenarioError(f"stop_when: must be one of {', '.join(STOP_CONDITIONS)}")
         world_path = f.get("world", lambda v, w: _world_file(v, w, base))
         lockstep = f.get("lockstep", boolean, True)
-        criteria = runner_criteria(world_path, lockstep)
+        robot = f.get("robot", _robot_name, None)
+        criteria = runner_criteria(world_path, lockstep, robot)
         criteria.update((c.metric, c) for c in f.get("criteria", _parse_criteria, ()))
         regression = f.get("regression", _parse_regression, ())
         name = f.get("name", string, source.stem if source else "scenario")
@@ -378,7 +406,9 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             start=f.get("start", lambda v, w: _start_pose(v, w, world_path), None),
             behaviour=behaviour,
             constant_command=constant,
-            rate_hz=f.get("rate_hz", number(gt=0.0, le=1000.0), 30.0),
+            rate_hz=f.get(
+                "rate_hz", number(gt=0.0, le=1000.0), (robot and frame_rate(robot)) or 30.0
+            ),
             duration=duration,
             stop_when=stop_when,
             lockstep=lockstep,
@@ -394,6 +424,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             seed=seed,
             camera_transport=f.get("camera_transport", parse_camera_transport, None),
             camera_mounting=f.section("camera_mounting", _parse_camera_mounting),
+            robot=robot,
             source=source,
             spec={**data, "name": name, "world": str(world_path)},
         )
@@ -403,10 +434,12 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
 
 
 def scenario_world(scenario: Scenario) -> World:
-    """The world the run plays: the scenario's world file, its camera moved to the scenario's
-    `camera_mounting` (the simulator's camera, the robot description and the node's mounting
-    all come from this one)."""
+    """The world the run plays: the scenario's world file, with the robot preset's camera and
+    limits, its camera moved to the scenario's `camera_mounting` (the simulator's camera, the
+    robot description and the node's mounting all come from this one)."""
     world = load_world(scenario.world_path)
+    if scenario.robot:
+        world = robot_world(world, scenario.robot)
     return replace(world, camera=scenario.camera_mounting.apply(world.camera))
 
 

@@ -1,7 +1,8 @@
 """`rosrun harness sim`: the simulator as a ROS node (a thin shell around Simulation).
 
 Publishes /clock, the camera image and camera_info (camera/rgb/image_raw, or its /compressed JPEG
-as the world's or scenario's camera transport says; camera/rgb/camera_info),
+as the world's or scenario's camera transport says; camera/rgb/camera_info; a robot preset's
+topics with its camera),
 the robot's pose as a base driver does (odom, nav_msgs/Odometry, and tf odom -> base_footprint,
 the root of the robot description; exact: the simulator's true pose), the same on ~pose (e.g.
 /sim/pose); subscribes cmd_vel and the
@@ -17,7 +18,9 @@ frame (camera dropout) pass at wall pace and apply what arrives on cmd_vel (the 
 stop). Real-time (~lockstep false): frames at ~rate_hz of wall clock, the latest cmd_vel applied.
 
 Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and perturbations) or
-~world (a world YAML or name), ~rate_hz (30), ~duration (s, 0 = forever), ~lockstep (true),
+~world (a world YAML or name), ~robot (a robot preset of follow_bot/config/robots.yaml whose
+camera and speed limits replace the world's; generic: the world's), ~rate_hz (30), ~duration (s, 0 =
+forever), ~lockstep (true),
 ~reply_timeout (2.0 wall s), ~status (the behaviour's status topic, e.g. follower/status;
 "" finds the one BehaviourStatus topic published in the simulator's namespace), ~record (path
 of an .npz trajectory log written at the end),
@@ -47,6 +50,7 @@ from follow_bot.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from follow_bot_msgs.msg import BehaviourStatus
 from harness.debug_video import DebugView
 from harness.node_cli import parse_node_command_line
+from harness.robot_preset import GENERIC, camera_topics, robot_world
 from harness.scenario import ScenarioError, load_scenario, scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
@@ -144,8 +148,11 @@ class SimNode:
             self.stop_at_lap = scenario.stop_when == "lap_complete"
             # stop_when: still ends the run after this long without motion (None: it does not)
             self.still_stop_s = scenario.still_stop_s if scenario.stop_when == "still" else None
+            robot = scenario.robot
         else:
             world = load_world(resolve_world_path(rospy.get_param("~world", "course")))
+            robot = rospy.get_param("~robot", GENERIC)
+            world = robot_world(world, robot)
             transport = world.camera_transport
             self.rate_hz = float(rospy.get_param("~rate_hz", 30.0))
             self.duration = float(rospy.get_param("~duration", 0.0))
@@ -173,13 +180,14 @@ class SimNode:
             warnings.filterwarnings("ignore", "The publisher should be created", SyntaxWarning)
             self.clock_pub = rospy.Publisher("/clock", Clock, queue_size=None)
             self.jpeg_quality = transport.jpeg_quality if transport.name == "compressed" else None
+            image_topic, info_topic = camera_topics(robot)
             if self.jpeg_quality is None:
-                self.image_pub = rospy.Publisher("camera/rgb/image_raw", Image, queue_size=None)
+                self.image_pub = rospy.Publisher(image_topic, Image, queue_size=None)
             else:  # what image_transport's `compressed` publisher would send
                 self.image_pub = rospy.Publisher(
-                    "camera/rgb/image_raw/compressed", CompressedImage, queue_size=None
+                    f"{image_topic}/compressed", CompressedImage, queue_size=None
                 )
-            self.info_pub = rospy.Publisher("camera/rgb/camera_info", CameraInfo, queue_size=None)
+            self.info_pub = rospy.Publisher(info_topic, CameraInfo, queue_size=None)
             # Odometry too: a behaviour that steers by it (the follower's default) must have this
             # step's before this step's frame, or lockstep runs would not repeat.
             self.pose_pub = rospy.Publisher("~pose", Odometry, queue_size=None)
