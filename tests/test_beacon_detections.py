@@ -24,7 +24,7 @@ import rospy
 from sensor_msgs.msg import CameraInfo, Image
 
 from follow_bot.msg import BeaconDetections
-from follow_bot.ros_image import bgr_to_msg
+from follow_bot_msgs.ros_image import bgr_to_msg
 from harness.render import Renderer
 from harness.run_scenario import free_port, stop, wait_for_port
 from harness.sim_node import camera_info_msg

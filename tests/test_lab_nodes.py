@@ -68,7 +68,7 @@ def client(node: str, out: str) -> dict:
     from sensor_msgs.msg import Image
     from std_msgs.msg import String
 
-    from follow_bot.ros_image import bgr_to_msg, msg_to_bgr
+    from follow_bot_msgs.ros_image import bgr_to_msg, msg_to_bgr
 
     rospy.init_node("lab_client", disable_signals=True)
     got: dict = {}

@@ -34,7 +34,7 @@ def client(out_png: str) -> None:
     from sensor_msgs.msg import Image
     from std_srvs.srv import Trigger
 
-    from follow_bot.ros_image import msg_to_bgr
+    from follow_bot_msgs.ros_image import msg_to_bgr
 
     rospy.init_node("panorama_test_client")
     rospy.wait_for_service("/panorama/capture", timeout=60)

@@ -19,8 +19,8 @@ from geometry_msgs.msg import Twist
 from sensor_msgs.msg import Image
 
 from follow_bot import core
-from follow_bot.ros_image import msg_to_bgr
 from follow_bot_msgs.msg import BehaviourStatus
+from follow_bot_msgs.ros_image import msg_to_bgr
 
 IMAGE = "camera/rgb/image_raw"  # relative: a namespace or a remap moves it
 

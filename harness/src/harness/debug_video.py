@@ -15,7 +15,7 @@ import roslib.message
 import rospy
 from sensor_msgs.msg import Image
 
-from follow_bot.ros_image import msg_to_bgr
+from follow_bot_msgs.ros_image import msg_to_bgr
 
 
 def side_by_side(raw: np.ndarray, debug: np.ndarray | None, lines: list[str]) -> np.ndarray:

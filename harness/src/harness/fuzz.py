@@ -169,7 +169,7 @@ def compressed_msg(msg):
     probes' exact answers still hold)."""
     from sensor_msgs.msg import CompressedImage
 
-    from follow_bot.ros_image import msg_to_bgr
+    from follow_bot_msgs.ros_image import msg_to_bgr
 
     out = CompressedImage()
     out.header = msg.header
@@ -636,7 +636,7 @@ class NodeUnderTest:
 def check_answer(probe: str, answers: list) -> str:
     last = answers[-1]
     if probe == "overlay":
-        from follow_bot.ros_image import msg_to_bgr
+        from follow_bot_msgs.ros_image import msg_to_bgr
 
         image = msg_to_bgr(last)
         # The red circle (radius 25) crosses the centre row 25 px right of the centre.

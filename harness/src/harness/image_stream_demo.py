@@ -12,7 +12,7 @@ import numpy as np
 import rospy
 from sensor_msgs.msg import Image
 
-from follow_bot.ros_image import bgr_to_msg, msg_to_bgr
+from follow_bot_msgs.ros_image import bgr_to_msg, msg_to_bgr
 from harness.node_cli import parse_node_command_line
 
 WIDTH, HEIGHT = 640, 480

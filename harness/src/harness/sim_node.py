@@ -46,8 +46,8 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
-from follow_bot.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from follow_bot_msgs.msg import BehaviourStatus
+from follow_bot_msgs.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from harness.debug_video import DebugView
 from harness.node_cli import parse_node_command_line
 from harness.robot_preset import GENERIC, camera_topics, robot_world
