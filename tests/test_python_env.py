@@ -41,3 +41,18 @@ def test_only_one_numpy_is_loaded_after_importing_ros_messages():
         [sys.executable, "-c", probe], check=True, capture_output=True, text=True
     ).stdout
     assert out.count("'") == 2, f"more than one numpy location loaded: {out}"
+
+
+def test_matplotlib_and_its_toolkits_are_one_installation():
+    # Two copies (pip's in the venv, Debian's python3-matplotlib) mix: Debian's mpl_toolkits is a
+    # regular package and wins over pip's namespace one, and matplotlib warns on every import.
+    probe = (
+        "import warnings; warnings.simplefilter('error');"
+        "import matplotlib, mpl_toolkits.mplot3d, os;"
+        "print(os.path.dirname(os.path.dirname(matplotlib.__file__)));"
+        "print(os.path.dirname(list(mpl_toolkits.__path__)[0]))"
+    )
+    lines = subprocess.run(
+        [sys.executable, "-c", probe], check=True, capture_output=True, text=True
+    ).stdout.split()
+    assert lines[0] == lines[1], lines
