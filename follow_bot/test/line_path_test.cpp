@@ -806,16 +806,19 @@ TEST(PathLawClosedLoop, CompensatesTheActuationDelay) {
     for (double delay : {0.1, 0.15}) {
       const Trace uncompensated = lap(speed, delay, 0.0);
       const Trace compensated = lap(speed, delay, delay);
-      EXPECT_LE(compensated.max_error, 0.01) << speed << " m/s, " << delay << " s";
-      EXPECT_LE(compensated.rms_error, 0.003) << speed << " m/s, " << delay << " s";
+      EXPECT_LE(compensated.max_error, 0.005) << speed << " m/s, " << delay << " s";
+      EXPECT_LE(compensated.rms_error, 0.00075) << speed << " m/s, " << delay << " s";
       if (speed >= 0.5) {
         EXPECT_GT(uncompensated.max_error, 3.0 * compensated.max_error) << delay << " s";
       }
     }
   }
-  for (double speed : {0.5, 0.7}) {
+  for (double speed : {0.2, 0.5, 0.7}) {
+    const Trace no_delay = lap(speed, 0.0, 0.0);
     const Trace told_wrongly = lap(speed, 0.0, 0.1);
+    EXPECT_LE(no_delay.max_error, 0.005) << speed << " m/s";
     EXPECT_LE(told_wrongly.max_error, 0.02) << speed << " m/s";
+    EXPECT_LE(told_wrongly.rms_error, 0.004) << speed << " m/s";
   }
 }
 
