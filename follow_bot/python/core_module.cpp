@@ -541,7 +541,8 @@ void bindSteering(py::module_& m) {
       .def_readwrite("max_points", &PathConfig::max_points)
       .def_readwrite("min_point_spacing", &PathConfig::min_point_spacing)
       .def_readwrite("bridge_gap", &PathConfig::bridge_gap)
-      .def_readwrite("max_frame_gap", &PathConfig::max_frame_gap);
+      .def_readwrite("max_frame_gap", &PathConfig::max_frame_gap)
+      .def_readwrite("command_latency", &PathConfig::command_latency);
   defKeywordInit(path);
 
   py::class_<SteeringConfig> config(m, "SteeringConfig",
@@ -558,11 +559,12 @@ void bindSteering(py::module_& m) {
 
   py::class_<LineObservation> observation(
       m, "LineObservation",
-      "One frame as a steering law sees it: the measurement, its stamp (s) and the twist applied "
-      "since the previous frame.");
+      "One frame as a steering law sees it: the measurement, its stamp (s), the twist applied "
+      "since the previous frame and the command sent after it.");
   observation.def_readwrite("measurement", &LineObservation::measurement)
       .def_readwrite("stamp", &LineObservation::stamp)
-      .def_readwrite("applied", &LineObservation::applied);
+      .def_readwrite("applied", &LineObservation::applied)
+      .def_readwrite("sent", &LineObservation::sent);
   defKeywordInit(observation);
 
   py::class_<LineSearch>(m, "LineSearch", "The lost-line state machine pd and path use.")
@@ -580,10 +582,10 @@ void bindSteering(py::module_& m) {
       .def(
           "step",
           [](SteeringLaw& law, const LineMeasurement& measurement, double stamp,
-             const Twist2D& applied) {
-            return law.step({measurement, stamp, applied});
+             const Twist2D& applied, const Twist2D& sent) {
+            return law.step({measurement, stamp, applied, sent});
           },
-          "measurement"_a, "stamp"_a, "applied"_a = Twist2D(),
+          "measurement"_a, "stamp"_a, "applied"_a = Twist2D(), "sent"_a = Twist2D(),
           "The command for one frame's measurement at `stamp` (s).")
       .def_property_readonly("state", &SteeringLaw::state)
       .def_property_readonly("mode", &SteeringLaw::mode)

@@ -170,9 +170,11 @@ LineMeasurement bandMeasurement(std::optional<double> column) {
   return m;
 }
 
-SteeringConfig atSpeed(double speed) {
+// A base that executes each command `latency` s after the frame, told so.
+SteeringConfig atSpeed(double speed, double latency = 0.0) {
   SteeringConfig config;
   config.max_linear = speed;
+  config.path.command_latency = latency;
   return config;
 }
 
@@ -195,6 +197,7 @@ struct Scenario {
   double blind_after = kInf;     // s; the camera sees no line from then on
   bool look_ahead = false;       // also report the look-ahead band
   double turn_scale = 1.0;       // the robot turns this fraction of the command it was sent
+  double delay = 0.0;            // s from a frame to the robot executing its command
   double max_time = 60.0;        // s
   CameraGeometry camera = harnessCamera();
   double band_row = kBandRow;  // the near band's centroid row
@@ -206,7 +209,9 @@ Trace simulate(const Scenario& scenario) {
   std::mt19937 random(7);
   std::uniform_real_distribution<double> noise(-scenario.pixel_noise, scenario.pixel_noise);
   Pose pose = scenario.start;
-  Twist2D applied;
+  Twist2D odometry;  // the robot's motion over the previous frame interval
+  Twist2D sent;      // the command sent after the previous frame
+  std::vector<std::pair<double, Twist2D>> sent_log;  // (time sent, command)
   Trace run;
   double sum_squares = 0.0;
   int samples = 0;
@@ -223,21 +228,62 @@ Trace simulate(const Scenario& scenario) {
     }
     run.final_error = error;
     const bool blind = frame * kFrameDt >= scenario.blind_after;
+    // The band's whole runs in the two rows about its centre row, shifted alike by the noise:
+    // where the line crosses the centre row, and which way it runs there.
     const auto observe = [&](double row) {
-      std::optional<double> column = scenario.course.bandColumn(camera, pose, index, row);
-      if (blind) column.reset();
-      if (column) *column += noise(random);
-      return column;
+      const double shift = noise(random);
+      const auto column = [&](double at_row) {
+        std::optional<double> u = scenario.course.bandColumn(camera, pose, index, at_row);
+        if (blind) u.reset();
+        if (u) *u += shift;
+        return u;
+      };
+      BandMeasurement band = bandAt(column(row), row);
+      if (!band.found) return band;
+      band.spans.clear();
+      for (double span_row : {row - 0.5, row + 0.5}) {
+        if (const std::optional<double> u = column(span_row)) {
+          band.spans.push_back({span_row, *u - 5.0, *u + 5.0});
+        }
+      }
+      return band;
     };
     LineMeasurement measurement;
     measurement.image_width = kWidth;
     measurement.image_height = kHeight;
-    measurement.band = bandAt(observe(scenario.band_row), scenario.band_row);
-    if (scenario.look_ahead) measurement.look_ahead = bandAt(observe(kLookAheadRow), kLookAheadRow);
-    applied = follower.step({measurement, frame * kFrameDt, applied});
+    measurement.band = observe(scenario.band_row);
+    if (scenario.look_ahead) measurement.look_ahead = observe(kLookAheadRow);
+    const double now = frame * kFrameDt;
+    sent = follower.step({measurement, now, odometry, sent});
+    sent_log.emplace_back(now, sent);
     run.states.push_back(follower.state());
     run.always_following &= follower.state() == LineState::kFollowing;
-    pose = drive(pose, {applied.linear, scenario.turn_scale * applied.angular}, kFrameDt);
+    // The robot executes at time t the latest command sent by t - delay; odometry reports the
+    // interval's mean commanded twist (so turn_scale stays an error the memory does not know).
+    const auto executing = [&](double t) {
+      Twist2D command;
+      for (const auto& [time_sent, twist] : sent_log) {
+        if (time_sent <= t - scenario.delay + 1e-9) command = twist;
+      }
+      return command;
+    };
+    std::vector<double> switches{now, now + kFrameDt};
+    for (const auto& entry : sent_log) {
+      const double at = entry.first + scenario.delay;
+      if (at > now + 1e-9 && at < now + kFrameDt - 1e-9) switches.push_back(at);
+    }
+    std::sort(switches.begin(), switches.end());
+    odometry = Twist2D();
+    for (size_t i = 0; i + 1 < switches.size(); ++i) {
+      const double held = switches[i + 1] - switches[i];
+      const Twist2D command = executing(switches[i]);
+      pose = drive(pose, {command.linear, scenario.turn_scale * command.angular}, held);
+      odometry.linear += command.linear * held / kFrameDt;
+      odometry.angular += command.angular * held / kFrameDt;
+    }
+    while (sent_log.size() > 1 && sent_log[1].first <= now - scenario.delay) {
+      sent_log.erase(sent_log.begin());
+    }
   }
   run.rms_error = samples > 0 ? std::sqrt(sum_squares / samples) : 0.0;
   return run;
@@ -404,6 +450,78 @@ TEST(PathLaw, WhenTheLineIsLostTheFallbackSearchesThenGivesUp) {
   // plus max_extrapolation (0.1 m): about 1.9 s at 0.3 m/s.
   const auto following = std::count(states.begin(), states.end(), LineState::kFollowing);
   EXPECT_NEAR(following * kFrameDt, 2.0 + 0.56 / 0.3, 0.2);
+}
+
+// A band seeing a straight line run from `near` to `far` (image columns of its last and first
+// rows), centred between them.
+LineMeasurement slantedBand(double near, double far) {
+  LineMeasurement m = bandMeasurement(0.5 * (near + far));
+  m.band.spans = {{kBandRow - 9.5, far - 5.0, far + 5.0},
+                  {kBandRow, m.band.centre_x - 5.0, m.band.centre_x + 5.0},
+                  {kBandRow + 9.5, near - 5.0, near + 5.0}};
+  return m;
+}
+
+// Follows a straight line ahead for 2.5 s at 0.3 m/s, goes blind until the remembered path has run
+// out (the fallback's search), turns in place by `turn_deg`, then sees `sighting`: whether that
+// is taken as the line.
+bool takenAfterTurning(double turn_deg, const LineMeasurement& sighting) {
+  PathLaw follower(atSpeed(0.3), harnessCamera());
+  double stamp = 0.0;
+  const Twist2D ahead{0.3, 0.0};
+  for (int frame = 0; frame < 75; ++frame, stamp += kFrameDt) {
+    follower.step({bandMeasurement(320.0), stamp, ahead, ahead});
+  }
+  for (int frame = 0; frame < 90; ++frame, stamp += kFrameDt) {
+    follower.step({bandMeasurement(std::nullopt), stamp, ahead, ahead});
+  }
+  EXPECT_NE(follower.state(), LineState::kFollowing) << "the memory has run out";
+  const Twist2D turning{0.0, degrees(turn_deg)};  // over 1 s
+  for (int frame = 0; frame < 30; ++frame, stamp += kFrameDt) {
+    follower.step({bandMeasurement(std::nullopt), stamp, turning, turning});
+  }
+  follower.step({sighting, stamp, Twist2D(), Twist2D()});
+  return follower.state() == LineState::kFollowing && follower.pathState().points > 0;
+}
+
+// The line straight ahead runs along the image's columns; on the floor, away from the robot.
+TEST(PathLaw, ReacquiresOnlyTheWayItWasGoing) {
+  const LineMeasurement straight_ahead = slantedBand(320.0, 320.0);
+  EXPECT_TRUE(takenAfterTurning(0.0, straight_ahead));
+  EXPECT_TRUE(takenAfterTurning(60.0, straight_ahead));
+  EXPECT_TRUE(takenAfterTurning(-60.0, straight_ahead));
+  // Turned round: the line it came along now lies ahead, running the other way.
+  EXPECT_FALSE(takenAfterTurning(180.0, straight_ahead));
+  EXPECT_FALSE(takenAfterTurning(-150.0, straight_ahead));
+  // Turned half round to the left: a line crossing the view from right (near) to left (far)
+  // runs back toward where it came from, one from left to right runs on.
+  EXPECT_FALSE(takenAfterTurning(100.0, slantedBand(600.0, 40.0)));
+  EXPECT_TRUE(takenAfterTurning(100.0, slantedBand(40.0, 600.0)));
+  // A band without the line's course through it (one row of whole runs) is not taken either.
+  EXPECT_FALSE(takenAfterTurning(30.0, bandMeasurement(320.0)));
+}
+
+// The refused sighting is no sighting for the fallback either: its search goes on turning the
+// way it was, rather than steering for the line behind.
+TEST(PathLaw, ARefusedSightingLeavesTheSearchAlone) {
+  PathLaw follower(atSpeed(0.3), harnessCamera());
+  double stamp = 0.0;
+  const Twist2D ahead{0.3, 0.0};
+  for (int frame = 0; frame < 75; ++frame, stamp += kFrameDt) {
+    follower.step({slantedBand(330.0, 330.0), stamp, ahead, ahead});
+  }
+  Twist2D command;
+  for (int frame = 0; frame < 150; ++frame, stamp += kFrameDt) {
+    command = follower.step({bandMeasurement(std::nullopt), stamp, command, command});
+  }
+  ASSERT_EQ(follower.state(), LineState::kSearching);
+  const double spin = command.angular;
+  // Spun round: the line ahead, left of centre, runs back the way the robot came.
+  follower.step({slantedBand(200.0, 200.0), stamp, {0.0, degrees(180.0) / kFrameDt}, command});
+  command = follower.step({slantedBand(200.0, 200.0), stamp + kFrameDt, command, command});
+  EXPECT_EQ(follower.state(), LineState::kSearching);
+  EXPECT_EQ(follower.pathState().points, 0);
+  EXPECT_DOUBLE_EQ(command.angular, spin);
 }
 
 TEST(PathLaw, NeverSeeingTheLineIsTheFallbacksSearch) {
@@ -660,6 +778,47 @@ TEST(PathLawClosedLoop, BridgesTheUnseenEndOfACurve) {
     EXPECT_LE(runs[true].max_error, 0.005) << c.name;
     EXPECT_LE(runs[true].rms_error, 0.002) << c.name;
     EXPECT_GT(runs[false].max_error, 3.0 * runs[true].max_error) << c.name;
+  }
+}
+
+// A base that executes each command 100 or 150 ms late (a real base's actuation delay), on the
+// harness's course at 0.5 m/s, odometry carrying the memory: steering from the frame's own pose
+// acts on an offset a delay old and weaves; steering from where the commands still in flight
+// take the robot (command_latency = the delay) follows as a base without delay does. A latency
+// told where the base has none costs little.
+TEST(PathLawClosedLoop, CompensatesTheActuationDelay) {
+  const auto lap = [](double speed, double delay, double latency) {
+    Scenario scenario{harnessCourse(), Pose(), atSpeed(speed, latency)};
+    scenario.settle = 0.3;
+    scenario.stop_before_end = 1.5;
+    scenario.pixel_noise = 0.5;
+    scenario.max_time = 120.0;
+    scenario.delay = delay;
+    const Trace run = simulate(scenario);
+    char name[64];
+    std::snprintf(name, sizeof name, "delay %3.0f ms, latency %3.0f ms", delay * 1e3,
+                  latency * 1e3);
+    report(name, speed, run);
+    EXPECT_GT(run.travelled, scenario.course.length() - 1.6) << name;
+    return run;
+  };
+  for (double speed : {0.2, 0.5}) {
+    for (double delay : {0.1, 0.15}) {
+      const Trace uncompensated = lap(speed, delay, 0.0);
+      const Trace compensated = lap(speed, delay, delay);
+      EXPECT_LE(compensated.max_error, 0.005) << speed << " m/s, " << delay << " s";
+      EXPECT_LE(compensated.rms_error, 0.00075) << speed << " m/s, " << delay << " s";
+      if (speed >= 0.5) {
+        EXPECT_GT(uncompensated.max_error, 3.0 * compensated.max_error) << delay << " s";
+      }
+    }
+  }
+  for (double speed : {0.2, 0.5, 0.7}) {
+    const Trace no_delay = lap(speed, 0.0, 0.0);
+    const Trace told_wrongly = lap(speed, 0.0, 0.1);
+    EXPECT_LE(no_delay.max_error, 0.005) << speed << " m/s";
+    EXPECT_LE(told_wrongly.max_error, 0.02) << speed << " m/s";
+    EXPECT_LE(told_wrongly.rms_error, 0.004) << speed << " m/s";
   }
 }
 

@@ -70,6 +70,28 @@ def test_full_lap_detected_with_time():
     assert half["laps"] == 0 and half["lap_time"] is None
 
 
+def test_max_reversal_is_the_length_driven_back():
+    # A quarter turn anticlockwise, then an eighth back the way it came: pi/4 m back on the unit
+    # circle; either way round the same.
+    there = circle(1.0, 250, turns=0.25)
+    back = there[::-1][: 125 + 1]
+    path = np.concatenate([there, back])
+    t = np.arange(len(path)) * 0.01
+    assert lap_stats(t, path, CENTRE)["max_reversal"] == pytest.approx(math.pi / 4, rel=0.02)
+    assert lap_stats(t, path[:, ::-1], CENTRE)["max_reversal"] == pytest.approx(
+        math.pi / 4, rel=0.02
+    )
+    # Driven one way only: nothing back.
+    assert lap_stats(t[:250], there, CENTRE)["max_reversal"] == 0.0
+    # Swaying 0.2 m back and forth before setting off clockwise: the sway is before the direction
+    # is chosen, yet counts as driven against it (0.2 m, as sampled).
+    sway = circle(1.0, 41, turns=0.2 / (2 * math.pi))
+    cw = circle(1.0, 250, turns=-0.25)
+    path = np.concatenate([sway, sway[::-1], cw])
+    t = np.arange(len(path)) * 0.01
+    assert lap_stats(t, path, CENTRE)["max_reversal"] == pytest.approx(0.2 * 40 / 41, rel=1e-3)
+
+
 def test_progress_ignores_jumps_and_far_samples():
     path = circle(1.0, 100, turns=0.5)
     far = path.copy()

@@ -30,6 +30,20 @@
 // straight or another curve is bridged exactly. The law tracks the bridge like any remembered
 // stretch.
 //
+// A base executes a command command_latency s after the frame it was made from (its actuation
+// delay), and in the meantime still executes the commands sent in the latency before the frame.
+// The law therefore steers from the pose those commands will have taken the robot to: it replays
+// the last command_latency s of commands sent (frame.sent) from the base and evaluates the fit
+// and pure pursuit there. Steering from the frame's own pose instead acts on an offset a latency
+// old: at 0.5 m/s a 150 ms delay is 7.5 cm of travel, most of the law's 10 cm time constant,
+// and the robot weaves.
+//
+// Direction of travel: while the path steers, the direction it runs is remembered (carried by
+// the motion like the points). Once the memory has run out, the fallback searching, a sighting
+// is taken as the line only when the line there, followed away from the robot, runs within
+// 90 deg of that direction: a search that spun the robot round must not take the line it came
+// along for the way on. The direction is forgotten after max_point_age s, like the points.
+//
 // The remembered path is only as good as the dead reckoning: exact when the robot executes the
 // commands it is sent (as the harness simulator does), but a robot turning 5 % more or less
 // than commanded runs about 1 cm off a 0.6 m radius curve.
@@ -53,7 +67,8 @@ namespace follow_bot {
 // arc it computed; only below min_linear is the angular clamped instead.
 class PathLaw : public SteeringLaw {
  public:
-  // The remembered path at the base, for a debug topic.
+  // The remembered path at the base, where the commands in flight will have taken it (the pose
+  // the law steers from), for a debug topic.
   struct PathState {
     bool valid = false;      // the path reaches the base and the tracking law is in use
     double lateral = 0.0;    // e_y, m: distance to the path, positive when it lies to the left
@@ -75,6 +90,10 @@ class PathLaw : public SteeringLaw {
   //  * when no path point remains ahead, the memory is cleared and the pd fallback steers; it
   //    has been shown the last sighting up to then, so its lost-line search is timed from the
   //    end of the remembered path and turns toward the side the line was last seen on.
+  //  * frame.sent, held over the last command_latency s of frames, places the pose it steers
+  //    from;
+  //  * with the memory run out, a band whose line runs against the remembered direction of
+  //    travel, or whose direction is unmeasurable, counts as not seeing the line.
   Twist2D step(const LineObservation& frame) override;
 
   // kFollowing while the remembered path steers, otherwise the fallback's state.
@@ -103,7 +122,17 @@ class PathLaw : public SteeringLaw {
     double end_stamp = 0.0;  // frame of the first sighting past the jump
   };
 
+  // A command sent over [begin, end) s.
+  struct SentCommand {
+    double begin = 0.0;
+    double end = 0.0;
+    Twist2D twist;
+  };
+
   void moveMemory(const Twist2D& applied, double dt);
+  void recordSent(const Twist2D& sent, double dt, double stamp);
+  // Whether a band's sighting may be taken as the line (the direction of travel rule).
+  bool keepsDirection(const BandMeasurement& band, double stamp) const;
   // Remembers where a jump from `before` (the band's previous sighting) to `after` begins,
   // when it is a jump forward along a stretch whose heading and curvature fit.
   void startBridge(const PathPoint& before, const cv::Point2d& after, double stamp);
@@ -111,7 +140,9 @@ class PathLaw : public SteeringLaw {
   // sightings past them are all forgotten.
   void appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps);
   void forgetStalePoints(double stamp);
-  void remember(const LineMeasurement& measurement, double stamp);
+  // Remembers the sightings kept by the direction of travel rule; returns the measurement with
+  // the bands it refused marked not found.
+  LineMeasurement remember(const LineMeasurement& measurement, double stamp);
   // Stores the band's floorCentre() unless it has none or it repeats the band's latest.
   void rememberBand(const BandMeasurement& band, bool look_ahead, double stamp);
   Twist2D drive(double curvature) const;
@@ -126,6 +157,10 @@ class PathLaw : public SteeringLaw {
   bool has_stamp_ = false;
   double last_stamp_ = 0.0;
   LineMeasurement last_sighting_;  // shown to the fallback while the path steers
+  std::deque<SentCommand> sent_;   // oldest first, the last command_latency s
+  // Unit, base_link: the way the remembered path ran when it last steered.
+  std::optional<cv::Point2d> travel_direction_;
+  double travel_stamp_ = 0.0;
 };
 
 }  // namespace follow_bot

@@ -97,6 +97,10 @@ struct PathConfig {
   // s; a longer interval between frames makes the dead reckoning too uncertain, so the memory
   // is cleared.
   double max_frame_gap = 0.5;
+  // s from the frame to the base executing the command made from it (a real base's 50-150 ms
+  // actuation delay). The law steers from where the commands already sent will have taken the
+  // robot by then (line_path.h); 0 steers from where the frame was taken.
+  double command_latency = FollowerDefaults::command_latency;
 };
 
 // Defaults suit a TurtleBot-class robot with a 640x480, 60 deg HFOV camera about 0.3 m up,
@@ -134,6 +138,10 @@ struct LineObservation {
   // the command actually sent (after any limiter), or a twist from wheel odometry where that is
   // better. Only path uses it (to carry its line memory).
   Twist2D applied;
+  // The command sent to the base after the previous frame (after any limiter), held until this
+  // frame. Only path uses it: the commands of the last command_latency s are still to be
+  // executed. Zero (a caller that does not say) predicts no motion.
+  Twist2D sent;
 };
 
 class SteeringLaw {

@@ -14,6 +14,54 @@ constexpr double kSmallTurnRad = 1e-6;
 
 bool isFinite(const cv::Point2d& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 
+// The displacement over the exact arc of `distance` m turning `turn` rad, in the frame at its
+// start.
+cv::Point2d arcDisplacement(double distance, double turn) {
+  if (std::abs(turn) < kSmallTurnRad) {
+    return cv::Point2d(distance * (1.0 - turn * turn / 6.0), distance * turn / 2.0);
+  }
+  return cv::Point2d(distance * std::sin(turn) / turn, distance * (1.0 - std::cos(turn)) / turn);
+}
+
+cv::Point2d rotated(const cv::Point2d& d, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return cv::Point2d(c * d.x - s * d.y, s * d.x + c * d.y);
+}
+
+// A pose in base_link at the latest frame.
+struct Pose2D {
+  cv::Point2d position{0.0, 0.0};
+  double yaw = 0.0;
+};
+
+// `positions` as seen from `pose`.
+std::vector<cv::Point2d> seenFrom(const std::vector<cv::Point2d>& positions, const Pose2D& pose) {
+  std::vector<cv::Point2d> seen;
+  seen.reserve(positions.size());
+  for (const cv::Point2d& p : positions) seen.push_back(rotated(p - pose.position, -pose.yaw));
+  return seen;
+}
+
+// The direction the band's line runs on the floor, followed away from the robot: from the
+// middle of its nearest whole run to that of its furthest. Empty when the band has fewer than
+// two rows of whole runs or they meet on the floor.
+std::optional<cv::Point2d> floorDirection(const BandMeasurement& band,
+                                          const CameraGeometry& camera) {
+  if (band.spans.size() < 2) return std::nullopt;
+  const auto middle = [&](const BandMeasurement::RowSpan& span) {
+    const cv::Point2d pixel =
+        rectifyPixel(camera, cv::Point2d(0.5 * (span.left + span.right), span.row));
+    return pixelToGround(camera, pixel.x, pixel.y);
+  };
+  const std::optional<cv::Point2d> far = middle(band.spans.front());  // spans run top to bottom
+  const std::optional<cv::Point2d> near = middle(band.spans.back());
+  if (!far || !near) return std::nullopt;
+  const cv::Point2d along = *far - *near;
+  const double length = std::sqrt(along.dot(along));
+  if (!(length > 1e-6)) return std::nullopt;
+  return along * (1.0 / length);
+}
+
 // The path near the base, in base_link.
 struct PathAtBase {
   double lateral = 0.0;
@@ -313,6 +361,8 @@ void PathLaw::reset() {
   following_ = false;
   has_stamp_ = false;
   last_sighting_ = LineMeasurement();
+  sent_.clear();
+  travel_direction_.reset();
 }
 
 LineState PathLaw::state() const { return following_ ? LineState::kFollowing : fallback_.state(); }
@@ -334,8 +384,9 @@ Twist2D PathLaw::step(const LineObservation& frame) {
   last_stamp_ = stamp;
 
   moveMemory(frame.applied, dt);
+  recordSent(frame.sent, dt, stamp);
   forgetStalePoints(stamp);
-  remember(measurement, stamp);
+  const LineMeasurement taken = remember(measurement, stamp);
 
   std::vector<cv::Point2d> positions;
   std::vector<double> stamps;
@@ -344,11 +395,29 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     stamps.push_back(point.stamp);
   }
   appendBridges(positions, stamps);
+
+  // Where the commands still to be executed take the base: the commands sent over the last
+  // command_latency s, replayed from here.
+  Pose2D predicted;
+  const double latency_start = stamp - config_.path.command_latency;
+  for (const SentCommand& command : sent_) {
+    const double held = command.end - std::max(command.begin, latency_start);
+    if (!(held > 0.0)) continue;
+    predicted.position += rotated(
+        arcDisplacement(command.twist.linear * held, command.twist.angular * held), predicted.yaw);
+    predicted.yaw += command.twist.angular * held;
+  }
+  if (!isFinite(predicted.position) || !std::isfinite(predicted.yaw)) predicted = Pose2D();
+  positions = seenFrom(positions, predicted);
+
   path_state_ = PathState();
   const std::optional<double> pursuit = pursuitCurvature(positions, config_.path.start_lookahead);
   std::optional<double> curvature = pursuit;
   if (const std::optional<PathAtBase> path = fitPathAtBase(
           positions, stamps, config_.path.fit_length, config_.path.max_extrapolation)) {
+    travel_direction_ =
+        rotated(cv::Point2d(std::cos(path->heading), std::sin(path->heading)), predicted.yaw);
+    travel_stamp_ = stamp;
     path_state_.valid = true;
     path_state_.lateral = path->lateral;
     path_state_.heading = path->heading;
@@ -371,42 +440,48 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     points_.clear();
     bridges_.clear();
     path_state_.points = 0;
-    return fallback_.step(frame);
+    return fallback_.step(LineObservation{taken, stamp, frame.applied, frame.sent});
   }
   path_state_.points = static_cast<int>(points_.size());
   // Keeps the fallback's clock and last side in step, so it starts from the end of the path.
-  fallback_.step(LineObservation{last_sighting_, stamp, frame.applied});
+  fallback_.step(LineObservation{last_sighting_, stamp, frame.applied, frame.sent});
   return drive(*curvature);
 }
 
 void PathLaw::moveMemory(const Twist2D& applied, double dt) {
-  if (points_.empty() || dt <= 0.0) return;
+  if ((points_.empty() && !travel_direction_) || dt <= 0.0) return;
   const double distance = applied.linear * dt;
   const double turn = applied.angular * dt;
   if (dt > config_.path.max_frame_gap || !std::isfinite(distance) || !std::isfinite(turn)) {
     points_.clear();
     bridges_.clear();
+    travel_direction_.reset();
     return;
   }
-  // The robot's displacement over the exact arc, in the previous base frame.
-  cv::Point2d displacement;
-  if (std::abs(turn) < kSmallTurnRad) {
-    displacement = cv::Point2d(distance * (1.0 - turn * turn / 6.0), distance * turn / 2.0);
-  } else {
-    displacement =
-        cv::Point2d(distance * std::sin(turn) / turn, distance * (1.0 - std::cos(turn)) / turn);
-  }
   // Points stay put in the world, so in the new frame they move by the inverse motion.
-  const double cos_turn = std::cos(turn);
-  const double sin_turn = std::sin(turn);
-  const auto rotate = [&](const cv::Point2d& d) {
-    return cv::Point2d(cos_turn * d.x + sin_turn * d.y, -sin_turn * d.x + cos_turn * d.y);
-  };
-  for (PathPoint& point : points_) point.position = rotate(point.position - displacement);
+  const cv::Point2d displacement = arcDisplacement(distance, turn);
+  for (PathPoint& point : points_) point.position = rotated(point.position - displacement, -turn);
   for (BridgeStart& bridge : bridges_) {
-    bridge.position = rotate(bridge.position - displacement);
-    bridge.tangent = rotate(bridge.tangent);
+    bridge.position = rotated(bridge.position - displacement, -turn);
+    bridge.tangent = rotated(bridge.tangent, -turn);
   }
+  if (travel_direction_) travel_direction_ = rotated(*travel_direction_, -turn);
+}
+
+void PathLaw::recordSent(const Twist2D& sent, double dt, double stamp) {
+  if (dt > 0.0) sent_.push_back(SentCommand{stamp - dt, stamp, sent});
+  while (!sent_.empty() && sent_.front().end <= stamp - config_.path.command_latency) {
+    sent_.pop_front();
+  }
+}
+
+bool PathLaw::keepsDirection(const BandMeasurement& band, double stamp) const {
+  if (!points_.empty() || !travel_direction_ ||
+      stamp - travel_stamp_ > config_.path.max_point_age) {
+    return true;
+  }
+  const std::optional<cv::Point2d> direction = floorDirection(band, camera_);
+  return direction && direction->dot(*travel_direction_) > 0.0;
 }
 
 void PathLaw::forgetStalePoints(double stamp) {
@@ -417,13 +492,18 @@ void PathLaw::forgetStalePoints(double stamp) {
   points_.erase(std::remove_if(points_.begin(), points_.end(), stale), points_.end());
 }
 
-void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
-  if (!measurement.ok()) return;
+LineMeasurement PathLaw::remember(const LineMeasurement& measurement, double stamp) {
+  if (!measurement.ok()) return measurement;
   const auto seen = [&](const BandMeasurement& band) {
     return band.found && band.confidence >= config_.min_confidence;
   };
-  const bool near = seen(measurement.band);
-  const bool ahead = seen(measurement.look_ahead);
+  LineMeasurement taken = measurement;
+  if (seen(taken.band) && !keepsDirection(taken.band, stamp)) taken.band.found = false;
+  if (seen(taken.look_ahead) && !keepsDirection(taken.look_ahead, stamp)) {
+    taken.look_ahead.found = false;
+  }
+  const bool near = seen(taken.band);
+  const bool ahead = seen(taken.look_ahead);
   // Only a band holding whole runs of the line knows where its centre is (centre_found); a line cut
   // by the image's side edge is remembered from the frames that see it whole, and is still a
   // sighting for the fallback.
@@ -431,11 +511,12 @@ void PathLaw::remember(const LineMeasurement& measurement, double stamp) {
   if (ahead && measurement.look_ahead.centre_found)
     rememberBand(measurement.look_ahead, true, stamp);
   while (points_.size() > static_cast<size_t>(config_.path.max_points)) points_.pop_front();
-  if (!near && !ahead) return;
-  last_sighting_ = measurement;
+  if (!near && !ahead) return taken;
+  last_sighting_ = taken;
   // The fallback steers on the near band only; a look-ahead sighting alone stands in for it so
   // the fallback still learns which side the line was on.
-  if (!near) last_sighting_.band = measurement.look_ahead;
+  if (!near) last_sighting_.band = taken.look_ahead;
+  return taken;
 }
 
 void PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double stamp) {

@@ -85,6 +85,7 @@ std::string validate(const SteeringConfig& c) {
            requireAtLeast("min_point_spacing", path.min_point_spacing, 0.0),
            requirePositive("bridge_gap", path.bridge_gap),
            requirePositive("max_frame_gap", path.max_frame_gap),
+           requireInRange("command_latency", path.command_latency, 0.0, 1.0),
        }) {
     if (!error.empty()) return error;
   }

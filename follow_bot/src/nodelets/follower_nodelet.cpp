@@ -65,7 +65,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
       NODELET_WARN_THROTTLE(5.0, "path mode: no valid camera_info on %s yet, steering with pd",
                             cameraInfoTopic().c_str());
     }
-    return law_->step({seen, stamp, has_odom_ ? odom_twist_ : last_command_});
+    return law_->step({seen, stamp, has_odom_ ? odom_twist_ : last_command_, last_command_});
   }
 
   LineState state() const { return law_->state(); }

@@ -51,6 +51,7 @@ FollowerSettings followerSettings(const FollowerConfig& cfg) {
   steering.search.search_rate = cfg.search_rate;
   steering.path.heading_gain = cfg.heading_gain;
   steering.path.lateral_gain = cfg.lateral_gain;
+  steering.path.command_latency = cfg.command_latency;
   requireValid({validate(detector), validate(steering)});
   return settings;
 }

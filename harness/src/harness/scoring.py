@@ -78,8 +78,27 @@ def progress(
     return np.concatenate([[0.0], np.cumsum(step)])
 
 
+# Progress before the direction of travel counts as chosen (m): a search may sway both ways.
+TRAVEL_DIRECTION_AFTER = 0.5
+
+
+def reversal(prog: np.ndarray) -> dict:
+    """How far progress ran back against the direction of travel (m): the largest drop below its
+    best so far. The direction is the sign of the progress when it first reaches
+    TRAVEL_DIRECTION_AFTER either way (else the final progress's), so a robot that turns round and
+    drives the course the wrong way scores the length it drove back."""
+    prog = np.asarray(prog, dtype=float)
+    if len(prog) == 0:
+        return {"max_reversal": 0.0}
+    chosen = np.nonzero(np.abs(prog) >= TRAVEL_DIRECTION_AFTER)[0]
+    direction = math.copysign(1.0, prog[chosen[0]] if len(chosen) else prog[-1])
+    along = direction * prog
+    return {"max_reversal": float(np.max(np.maximum.accumulate(along) - along))}
+
+
 def lap_stats(t, path, centreline: np.ndarray, *, max_offset: float = LAP_MAX_OFFSET) -> dict:
-    """Loop progress, completed laps and the time of the first full lap (None if none).
+    """Loop progress, completed laps, the time of the first full lap (None if none) and how far
+    progress ran back against the direction of travel (`max_reversal`, m).
 
     A lap is complete when |progress| reaches the loop length, in either direction.
     """
@@ -92,6 +111,7 @@ def lap_stats(t, path, centreline: np.ndarray, *, max_offset: float = LAP_MAX_OF
     done = np.nonzero(reach >= length)[0]
     final = float(prog[-1]) if len(prog) else 0.0
     return {
+        **reversal(prog),
         "loop_length": length,
         "progress": final,
         "direction": int(math.copysign(1, final)) if final else 0,
