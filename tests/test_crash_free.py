@@ -1,6 +1,6 @@
-"""The four inputs that killed every node (issue 12), malformed payloads of the compressed
-image_transport (issue 14; the nodes run with _image_transport:=compressed) and broken or
-extreme camera_info each followed by a frame (issue 14, the lens), each sent to a
+"""The four inputs that once killed every node, malformed payloads of the compressed
+image_transport (the nodes run with _image_transport:=compressed) and broken or
+extreme camera_info each followed by a frame (a lens's), each sent to a
 fresh copy of every node: the process must survive, and a valid frame afterwards must get the
 right answer, through `harness.fuzz --cases` (a roscore and nodes of its own)."""
 

@@ -1,4 +1,4 @@
-"""The camera's mounting from tf (issue 14, "Missing tf"): a behaviour node started without a
+"""The camera's mounting from tf: a behaviour node started without a
 robot description holds still and says which transform it waits for, drives as soon as the
 transform appears (with the mounting tf gives), falls back to its mounting ~params after
 ~mounting_timeout (said once, loudly), and needs no tf at all with ~camera_mounting params.

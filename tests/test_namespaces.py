@@ -1,4 +1,4 @@
-"""Topic names (issue 14, item 5): every node's default topics are relative to its namespace,
+"""Topic names: every node's default topics are relative to its namespace,
 the same for the node executable and the nodelet; remapping the names `rosnode info` shows is
 honoured; the simulator and a behaviour in one `<group ns>` drive together.
 

@@ -1,4 +1,4 @@
-"""rectify:=true of every behaviour launch (issue 14, a real lens): Debian's image_proc rectify
+"""rectify:=true of every behaviour launch (a real lens): Debian's image_proc rectify
 nodelet (rectify.launch) in the behaviour's own nodelet manager, and the behaviour's nodelet on
 its image_rect with ~image_rectified. Checked as roslaunch resolves it (--nodes, --args), without
 a roscore."""

@@ -1,4 +1,4 @@
-"""The robot description (issue 14, item 1): a launch that runs a world publishes the URDF of that
+"""The robot description: a launch that runs a world publishes the URDF of that
 world's camera mounting through robot_state_publisher, and the simulator publishes odom and
 odom -> base_footprint as a base driver does. In a running course.launch the tf tree must give
 base_footprint <- camera_rgb_optical_frame exactly as the world's camera is mounted (the pose the

@@ -26,7 +26,7 @@ FAMILY_SIZES = {
     "beacons_red_stop": 5, "parker_tag": 19, "parker_sign": 15,
     # The Python lab nodes (follow_bot/scripts) on their C++ twins' criteria (extends).
     "lab_follow_green": 2, "lab_red_stop": 2, "lab_line_follower": 3,
-    # Issue 15: every behaviour's family under the `realistic` camera, the follower's lap also
+    # Every behaviour's family under the `realistic` camera, the follower's lap also
     # under each of its effects alone (worlds/realistic/README.md).
     "follower_realistic": 19, "dumpster_realistic": 2, "beacons_follow_green_realistic": 1,
     "beacons_red_stop_realistic": 1, "parker_tag_realistic": 3, "parker_sign_realistic": 3,
@@ -60,7 +60,7 @@ QUICK = {
     "beacons_follow_green_realistic/realistic", "beacons_red_stop_realistic/realistic",
     "parker_tag_realistic/d1_off10_b0_realistic", "parker_sign_realistic/d1.5_off0_b18_realistic",
 }  # fmt: skip
-# Issue 14: every behaviour's runs through the turtlebot3 barrel lens, each with the start and
+# Every behaviour's runs through the turtlebot3 barrel lens, each with the start and
 # the bounds of its pinhole twin.
 LENS_TWINS = {
     "follower/lap_lens": "follower/lap_default",

@@ -50,7 +50,7 @@ def test_graffiti_pair_stitches_within_three_pixels_of_the_truth(stitched):
 
     # The panorama's misregistration at each graf1 pixel p that graf3 sees: |H(H_true p) - p|,
     # over a 4 px grid reaching graf1's borders. Measured: median 0.38 px, max 2.41 px (the
-    # core's gtest has the same figures; ECC always gave max 3.38 px); the issue's bound is 3 px.
+    # core's gtest has the same figures; ECC always gave max 3.38 px); the goal is 3 px.
     height, width = cv2.imread(str(GRAF1)).shape[:2]
     xs = np.r_[np.arange(0, width - 1, 4), width - 1]
     ys = np.r_[np.arange(0, height - 1, 4), height - 1]

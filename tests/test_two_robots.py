@@ -1,4 +1,4 @@
-"""Two robots in one ROS graph (issue 14, "Names"): robot1 and robot2, each a simulator, its
+"""Two robots in one ROS graph: robot1 and robot2, each a simulator, its
 robot description and the follower in a namespace of its own (<group ns>), both lap the course
 with the lap_default bounds, and neither hears the other's topics.
 

@@ -113,7 +113,7 @@ TEST(RealPhotographs, GraffitiPairWithinThreePixelsAndNoWorseThanRansacAlone) {
   EXPECT_GT(gated_error.points, 30000);
   // Measured (OpenCV 4.6, this grid): RANSAC alone and gated both median 0.38 px, max 2.41 px
   // (in the border band); ECC always was median 0.65 px, max 3.38 px. The bound on the max is
-  // the 3 px (0.59 px of margin), the median's keeps 0.12 px of margin.
+  // the 3 px goal (0.59 px of margin), the median's keeps 0.12 px of margin.
   EXPECT_LE(gated_error.max, 3.0);
   EXPECT_LE(gated_error.median, 0.5);
   // Never worse than RANSAC alone on this pair, at the median or at the worst grid point.
