@@ -295,7 +295,7 @@ def test_steering_laws_equal_cpp_on_course_frames(tmp_path, mode):
     applied = core.Twist2D()
     states = set()
     for i, (frame, cpp) in enumerate(zip(frames, expected, strict=True)):
-        applied = law.step(detector.detect(frame), i / 30.0, applied)
+        applied = law.step(detector.detect(frame), i / 30.0, applied, applied)
         assert_twist_close(applied, cpp, cpp["frame"])
         assert law.state.name == cpp["state"], cpp["frame"]
         states.add(cpp["state"])

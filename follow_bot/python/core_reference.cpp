@@ -97,7 +97,8 @@ int steer(int argc, char** argv) {
       std::cerr << "core_reference: cannot read frame '" << argv[i] << "'\n";
       return 1;
     }
-    applied = law->step({detector.detect(frame), (i - 3) * kFramePeriod, applied});
+    // A base without delay: what was sent after the last frame is what it did.
+    applied = law->step({detector.detect(frame), (i - 3) * kFramePeriod, applied, applied});
     std::printf("{\"frame\": \"%s\", ", argv[i]);
     printTwist(applied);
     std::printf(", \"state\": \"%s\"}\n", follow_bot::toString(law->state()));
