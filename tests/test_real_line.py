@@ -18,6 +18,7 @@ of the default line_width (our course's 5 cm) on every band.
 import math
 
 import cv2
+import numpy as np
 
 from follow_bot import core
 
@@ -92,11 +93,23 @@ def load(realdata, name):
     return frame
 
 
-def measure(realdata, detector_config, name, first_row):
+SKY_SHADOW_TINT = (1.1, 1.0, 0.95)  # BGR gains of a sky-lit shadow: blue up, red down
+
+
+def in_shadow(frame, brightness):
+    gains = np.array(SKY_SHADOW_TINT, np.float32) * brightness
+    return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
+
+
+def measure(realdata, detector_config, name, first_row, shadow=1.0):
+    """The band at first_row of the frame; below 1, `shadow` is the light left on it (in_shadow)."""
     camera = nominal_camera()
     config = detector_config()
     config.band = core.BandConfig(distance_m=band_distance(camera, first_row), rows=BAND_ROWS)
-    band = core.LineDetector(config, camera).detect(load(realdata, name)).band
+    frame = load(realdata, name)
+    if shadow < 1:
+        frame = in_shadow(frame, shadow)
+    band = core.LineDetector(config, camera).detect(frame).band
     assert band.row_begin == first_row
     return band
 
@@ -124,10 +137,11 @@ def test_the_line_is_found_within_25_px_and_no_line_where_there_is_none(realdata
 
 
 def lecture_config():
-    """The lecture's pipeline: its colour box (V >= 100), no floor test, no width gate, and every
-    pixel in the box counts."""
+    """The lecture's pipeline: its colour box (H 20-30, S and V >= 100), no floor test, no width
+    gate, and every pixel in the box counts."""
     config = core.LineDetectorConfig()
     config.lower = core.HsvColor(h=20, s=100, v=100)
+    config.upper = core.HsvColor(h=30, s=255, v=255)
     config.floor_margin = 0
     config.line_width_factor = 0.0
     config.blob_chroma_fraction = 0.0
@@ -167,3 +181,28 @@ def test_the_floor_test_not_a_v_floor_keeps_dark_floor_out(realdata):
     no_floor_test = misses(realdata, with_changes(floor_margin=0))
     assert len(no_floor_test) >= 5, no_floor_test
     assert misses(realdata, with_changes(lower=core.HsvColor(h=20, s=100, v=0))) == []
+
+
+def test_the_line_in_a_shadow_on_the_real_frames(realdata, record_property):
+    """Every labelled frame as if a bluish hard shadow covered it: at 55 % of the light nearly
+    every line is still found, at 30 % (real paint's yellowness there is ~45, at the floor test's
+    margin) about half; a line where there is none, never. The lecture finds none at 30 %."""
+    found = {}
+    for brightness in (0.55, 0.3):
+        lines = hits = clean = lecture_hits = 0
+        for (name, first_row), label in LABELS.items():
+            band = measure(realdata, core.LineDetectorConfig, name, first_row, brightness)
+            if label is None:
+                clean += not band.found
+            else:
+                lines += 1
+                hits += verdict(band, label)
+                lecture = measure(realdata, lecture_config, name, first_row, brightness)
+                lecture_hits += verdict(lecture, label)
+        found[brightness] = hits
+        record_property(f"shadow {brightness}", f"{hits}/{lines} lines, lecture {lecture_hits}")
+        assert clean == len(LABELS) - lines, brightness
+        if brightness == 0.3:
+            assert lecture_hits == 0
+    assert found[0.55] >= 22, found
+    assert found[0.3] >= 12, found

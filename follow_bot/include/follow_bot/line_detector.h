@@ -131,8 +131,9 @@ BandPlacement placeBand(const CameraGeometry& camera, const BandConfig& band, in
 // Defaults: cfg/Follower.cfg's (FollowerDefaults, generated).
 struct LineDetectorConfig {
   using Defaults = FollowerDefaults;
-  // The lecture's yellow, but V >= 40 where the lecture has 100: paint in a deep shadow reads
-  // V ~70. Dark floor is kept out by the floor test below, not by a V floor.
+  // The lecture's yellow, but V >= 40 where the lecture has 100 (paint in a deep shadow reads
+  // V ~70; dark floor is kept out by the floor test below, not by a V floor), and H <= 34 where
+  // the lecture has 30 (real paint reads 29-31 in daylight, 32-34 in a bluish shadow).
   HsvColor lower{Defaults::h_min, Defaults::s_min, Defaults::v_min};
   HsvColor upper{Defaults::h_max, Defaults::s_max, Defaults::v_max};
   BandConfig band;  // on the default mounting, the lecture's band
@@ -176,7 +177,9 @@ std::string validate(const LineDetectorConfig& config);
 struct BandMeasurement {
   // The band's fitted floor test: line pixels have min(R, G) - B >= this (0 without the test).
   int min_yellowness = 0;
-  bool found = false;   // pixel_count >= min_pixels
+  // pixel_count >= min_pixels and, where the band holds several blobs, one of those measured
+  // alone has min_pixels.
+  bool found = false;
   int pixel_count = 0;  // line pixels in the band: the lecture's m00 / 255
   // Centroid in full-image pixel coordinates (pixel index, as cv::moments); valid whenever
   // pixel_count > 0, including below min_pixels.
@@ -345,13 +348,12 @@ class LineDetector {
   // The band's 8-connected blobs of line pixels, found from each row's runs (cheaper than
   // labelling a mask: a band holds a few dozen runs).
   struct Blobs;
-  // The sums of the blob nearest expected_x among the `candidates`: of those whose columns come
-  // nearest it, the largest, so a speck of noise beside the line does not win.
-  static BandSums nearestBlobSums(const Blobs& blobs, const std::vector<bool>& candidates,
-                                  double expected_x);
-  // The sums of the `candidates` blob_chroma_fraction keeps, or nothing when that is every blob.
-  std::optional<BandSums> saturatedBlobSums(const Blobs& blobs,
-                                            const std::vector<bool>& candidates) const;
+  // The blob nearest expected_x among the `candidates` (as a mask over the blobs): of those
+  // whose columns come nearest it, the largest, so a speck of noise beside the line does not win.
+  static std::vector<bool> nearestBlob(const Blobs& blobs, const std::vector<bool>& candidates,
+                                       double expected_x);
+  // The `candidates` blob_chroma_fraction keeps.
+  std::vector<bool> saturatedBlobs(const Blobs& blobs, const std::vector<bool>& candidates) const;
   void fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const;
 
   LineDetectorConfig config_;

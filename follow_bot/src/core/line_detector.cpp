@@ -9,7 +9,6 @@
 #include <optional>
 #include <sstream>
 #include <stdexcept>
-#include <utility>
 #include <vector>
 
 #include <opencv2/core/hal/intrin.hpp>
@@ -587,14 +586,19 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
     for (int blob = 0; blob < blobs.count; ++blob) {
       candidates[blob] = !tooWide(blobs.extents[blob], scale);
     }
-    if (expected_x) {
-      sums = nearestBlobSums(blobs, candidates, *expected_x);
-    } else if (std::optional<BandSums> kept = saturatedBlobSums(blobs, candidates)) {
-      sums = std::move(*kept);
+    const std::vector<bool> kept = expected_x ? nearestBlob(blobs, candidates, *expected_x)
+                                              : saturatedBlobs(blobs, candidates);
+    int largest = 0;
+    for (int blob = 0; blob < blobs.count; ++blob) {
+      largest = std::max(largest, kept[blob] ? blobs.area[blob] : 0);
     }
-  } else if (tooWide(sums.extents, scale)) {
-    sums = BandSums();
+    if (std::find(kept.begin(), kept.end(), false) != kept.end()) sums = blobs.sums(kept);
+    fillBand(sums, bgr.cols, &result);
+    // Specks (of floor between blobs the gates left out, or noise) add up to no line.
+    result.found = result.found && largest >= config_.min_pixels;
+    return result;
   }
+  if (tooWide(sums.extents, scale)) sums = BandSums();
   fillBand(sums, bgr.cols, &result);
   return result;
 }
@@ -661,9 +665,8 @@ bool LineDetector::tooWide(const RowExtents& extents,
   return width > config_.line_width_factor * config_.line_width_m;
 }
 
-LineDetector::BandSums LineDetector::nearestBlobSums(const Blobs& blobs,
-                                                     const std::vector<bool>& candidates,
-                                                     double expected_x) {
+std::vector<bool> LineDetector::nearestBlob(const Blobs& blobs, const std::vector<bool>& candidates,
+                                            double expected_x) {
   int best = -1;
   double best_distance = 0.0;
   for (int blob = 0; blob < blobs.count; ++blob) {
@@ -678,11 +681,11 @@ LineDetector::BandSums LineDetector::nearestBlobSums(const Blobs& blobs,
   }
   std::vector<bool> kept(blobs.count, false);
   if (best >= 0) kept[best] = true;
-  return blobs.sums(kept);
+  return kept;
 }
 
-std::optional<LineDetector::BandSums> LineDetector::saturatedBlobSums(
-    const Blobs& blobs, const std::vector<bool>& candidates) const {
+std::vector<bool> LineDetector::saturatedBlobs(const Blobs& blobs,
+                                               const std::vector<bool>& candidates) const {
   std::vector<double> mean_chroma(blobs.count);
   double strongest = 0.0, strongest_line_sized = 0.0;
   for (int blob = 0; blob < blobs.count; ++blob) {
@@ -696,13 +699,10 @@ std::optional<LineDetector::BandSums> LineDetector::saturatedBlobSums(
   const double bar = config_.blob_chroma_fraction *
                      (strongest_line_sized > 0.0 ? strongest_line_sized : strongest);
   std::vector<bool> kept(blobs.count);
-  bool all_kept = true;
   for (int blob = 0; blob < blobs.count; ++blob) {
     kept[blob] = candidates[blob] && mean_chroma[blob] >= bar;
-    all_kept = all_kept && kept[blob];
   }
-  if (all_kept) return std::nullopt;
-  return blobs.sums(kept);
+  return kept;
 }
 
 void LineDetector::BandSums::addRow(int y, const RowSums& row, int image_width) {
