@@ -688,8 +688,8 @@ TEST(LineDetector, MeasuresTheLookAheadBandWhenEnabled) {
   EXPECT_EQ(without.look_ahead.pixel_count, 0);
 }
 
-// Real paint under an even light, on the grey floor, as a camera sees them (sensor noise
-// sigma 4): Duckietown's yellow paint at noon reads about this (V ~225, yellowness ~175).
+// Yellow paint under an even light, on the grey floor, as a camera sees them (sensor noise
+// sigma 4): HSV (27, 221, 225), yellowness 175, the bench's line colour.
 const cv::Scalar kPaint(30, 205, 225);
 constexpr double kSensorNoise = 4.0;
 
