@@ -95,6 +95,7 @@ int main() {
   // the lecture, so both must find the same centroid before their speeds mean anything.
   follow_bot::LineDetectorConfig every_pixel;
   every_pixel.lower.v = 100;
+  every_pixel.upper.h = 30;
   every_pixel.blob_chroma_fraction = 0.0;
   every_pixel.floor_margin = 0;
   every_pixel.line_width_factor = 0.0;
