@@ -692,7 +692,7 @@ def test_imports_with_debians_python():
          "core as ic; print(core.LineDetectorConfig(), ic.OverlayConfig())"],
         capture_output=True, text=True, check=True, timeout=60,
     )  # fmt: skip
-    assert out.stdout.startswith("LineDetectorConfig(lower=HsvColor(h=20, s=100, v=100)")
+    assert out.stdout.startswith("LineDetectorConfig(lower=HsvColor(h=20, s=100, v=40)")
     overlay = "OverlayConfig(radius_px=25, thickness_px=2, min_image_size=50)"
     assert out.stdout.rstrip().endswith(overlay)
 

@@ -11,11 +11,14 @@ anti-instagram inputs) and the four colour-cast photos (resized from 1080x810 to
 
 The detector runs with its defaults (cfg/Follower.cfg), the band placed on the rows by ground
 distance for the set's nominal camera (README there: K; mounting ~0.1 m high, ~17 deg down).
+Through that unmeasured mounting the paint is 1-4 cm wide on the floor, inside the width gate
+of the default line_width (our course's 5 cm) on every band.
 """
 
 import math
 
 import cv2
+import numpy as np
 
 from follow_bot import core
 
@@ -90,11 +93,23 @@ def load(realdata, name):
     return frame
 
 
-def measure(realdata, detector_config, name, first_row):
+SKY_SHADOW_TINT = (1.1, 1.0, 0.95)  # BGR gains of a sky-lit shadow: blue up, red down
+
+
+def in_shadow(frame, brightness):
+    gains = np.array(SKY_SHADOW_TINT, np.float32) * brightness
+    return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
+
+
+def measure(realdata, detector_config, name, first_row, shadow=1.0):
+    """The band at first_row of the frame; below 1, `shadow` is the light left on it (in_shadow)."""
     camera = nominal_camera()
     config = detector_config()
     config.band = core.BandConfig(distance_m=band_distance(camera, first_row), rows=BAND_ROWS)
-    band = core.LineDetector(config, camera).detect(load(realdata, name)).band
+    frame = load(realdata, name)
+    if shadow < 1:
+        frame = in_shadow(frame, shadow)
+    band = core.LineDetector(config, camera).detect(frame).band
     assert band.row_begin == first_row
     return band
 
@@ -121,19 +136,73 @@ def test_the_line_is_found_within_25_px_and_no_line_where_there_is_none(realdata
     assert not misses, misses
 
 
-def test_the_lectures_pipeline_is_what_the_colour_casts_break(realdata):
-    """The same frames with blob_chroma_fraction 0 (every pixel in the colour box counts, as the
-    lecture): the warm casts flood the band with floor, so the label set does catch it."""
+def lecture_config():
+    """The lecture's pipeline: its colour box (H 20-30, S and V >= 100), no floor test, no width
+    gate, and every pixel in the box counts."""
+    config = core.LineDetectorConfig()
+    config.lower = core.HsvColor(h=20, s=100, v=100)
+    config.upper = core.HsvColor(h=30, s=255, v=255)
+    config.floor_margin = 0
+    config.line_width_factor = 0.0
+    config.blob_chroma_fraction = 0.0
+    return config
 
-    def lecture():
-        config = core.LineDetectorConfig()
-        config.blob_chroma_fraction = 0.0
-        return config
 
-    misses = [
+def misses(realdata, detector_config):
+    return [
         (name, first_row)
         for (name, first_row), label in LABELS.items()
-        if not verdict(measure(realdata, lecture, name, first_row), label)
+        if not verdict(measure(realdata, detector_config, name, first_row), label)
     ]
-    assert len(misses) >= 4, misses
-    assert all(name.startswith("pic") for name, _ in misses), misses
+
+
+def test_the_lectures_pipeline_is_what_the_colour_casts_break(realdata):
+    """The same frames through the lecture's pipeline: the warm casts flood the band with floor,
+    so the label set does catch it."""
+    missed = misses(realdata, lecture_config)
+    assert len(missed) >= 4, missed
+    assert all(name.startswith("pic") for name, _ in missed), missed
+
+
+def with_changes(**changes):
+    def config():
+        config = core.LineDetectorConfig()
+        for field, value in changes.items():
+            setattr(config, field, value)
+        return config
+
+    return config
+
+
+def test_the_floor_test_not_a_v_floor_keeps_dark_floor_out(realdata):
+    """Without the floor test a V floor low enough for paint in a shadow lets dark, warm floor in
+    (a line reported on frames without one, or the line lost in a floor blob); with it, no V floor
+    is needed at all."""
+    no_floor_test = misses(realdata, with_changes(floor_margin=0))
+    assert len(no_floor_test) >= 5, no_floor_test
+    assert misses(realdata, with_changes(lower=core.HsvColor(h=20, s=100, v=0))) == []
+
+
+def test_the_line_in_a_shadow_on_the_real_frames(realdata, record_property):
+    """Every labelled frame as if a bluish hard shadow covered it: at 55 % of the light nearly
+    every line is still found, at 30 % (real paint's yellowness there is ~45, at the floor test's
+    margin) about half; a line where there is none, never. The lecture finds none at 30 %."""
+    found = {}
+    for brightness in (0.55, 0.3):
+        lines = hits = clean = lecture_hits = 0
+        for (name, first_row), label in LABELS.items():
+            band = measure(realdata, core.LineDetectorConfig, name, first_row, brightness)
+            if label is None:
+                clean += not band.found
+            else:
+                lines += 1
+                hits += verdict(band, label)
+                lecture = measure(realdata, lecture_config, name, first_row, brightness)
+                lecture_hits += verdict(lecture, label)
+        found[brightness] = hits
+        record_property(f"shadow {brightness}", f"{hits}/{lines} lines, lecture {lecture_hits}")
+        assert clean == len(LABELS) - lines, brightness
+        if brightness == 0.3:
+            assert lecture_hits == 0
+    assert found[0.55] >= 22, found
+    assert found[0.3] >= 12, found

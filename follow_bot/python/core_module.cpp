@@ -134,7 +134,11 @@ void bindLineDetector(py::module_& m) {
       .def_readwrite("look_ahead", &LineDetectorConfig::look_ahead)
       .def_readwrite("min_pixels", &LineDetectorConfig::min_pixels)
       .def_readwrite("max_width_fraction", &LineDetectorConfig::max_width_fraction)
-      .def_readwrite("blob_chroma_fraction", &LineDetectorConfig::blob_chroma_fraction);
+      .def_readwrite("blob_chroma_fraction", &LineDetectorConfig::blob_chroma_fraction)
+      .def_readwrite("floor_margin", &LineDetectorConfig::floor_margin)
+      .def_readwrite("floor_mads", &LineDetectorConfig::floor_mads)
+      .def_readwrite("line_width_m", &LineDetectorConfig::line_width_m)
+      .def_readwrite("line_width_factor", &LineDetectorConfig::line_width_factor);
   defKeywordInit(config, static_cast<Validator<LineDetectorConfig>>(&validate));
 
   using RowSpan = BandMeasurement::RowSpan;
@@ -145,7 +149,8 @@ void bindLineDetector(py::module_& m) {
   defKeywordInit(span);
 
   py::class_<BandMeasurement> measurement(m, "BandMeasurement");
-  measurement.def_readwrite("found", &BandMeasurement::found)
+  measurement.def_readwrite("min_yellowness", &BandMeasurement::min_yellowness)
+      .def_readwrite("found", &BandMeasurement::found)
       .def_readwrite("pixel_count", &BandMeasurement::pixel_count)
       .def_readwrite("centroid_x", &BandMeasurement::centroid_x)
       .def_readwrite("centroid_y", &BandMeasurement::centroid_y)

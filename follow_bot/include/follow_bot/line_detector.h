@@ -131,8 +131,9 @@ BandPlacement placeBand(const CameraGeometry& camera, const BandConfig& band, in
 // Defaults: cfg/Follower.cfg's (FollowerDefaults, generated).
 struct LineDetectorConfig {
   using Defaults = FollowerDefaults;
-  // The lecture's yellow. The lecture's upper V is 255, so V >= 100 is the only V condition;
-  // it rejects dark, noisy pixels whose hue is meaningless.
+  // The lecture's yellow, but V >= 40 where the lecture has 100 (paint in a deep shadow reads
+  // V ~70; dark floor is kept out by the floor test below, not by a V floor), and H <= 34 where
+  // the lecture has 30 (real paint reads 29-31 in daylight, 32-34 in a bluish shadow).
   HsvColor lower{Defaults::h_min, Defaults::s_min, Defaults::v_min};
   HsvColor upper{Defaults::h_max, Defaults::s_max, Defaults::v_max};
   BandConfig band;  // on the default mounting, the lecture's band
@@ -142,6 +143,22 @@ struct LineDetectorConfig {
   // A band is `found` with at least this many line pixels. Measurements with fewer (but > 0)
   // pixels still carry a centroid, which is what the lecture uses.
   int min_pixels = Defaults::min_pixels;
+  // The floor test: a line pixel must also be yellower (min(R, G) - B) than the band's floor by
+  // floor_margin levels, or by floor_mads median absolute deviations where that is more; the
+  // floor's median and MAD are sampled from the band itself every frame (every 4th pixel of
+  // every 4th row), so a cast, glare or shadow that moves the whole floor moves the threshold
+  // with it, while paint, even in a shadow at 30 % of the light, stays far yellower than the
+  // floor around it. 0: no floor test, the colour box alone.
+  int floor_margin = Defaults::floor_margin;
+  double floor_mads = Defaults::floor_mads;
+  // The width gate: a blob whose mean width across its direction on the floor (its extent in
+  // each row, taken to the floor through the camera model at the band's centre row) exceeds
+  // line_width_factor times line_width_m is not the line (a yellow box, a patch of cast floor).
+  // Where the image's side edge cuts a blob, what is seen of it counts. Blobs in fewer than 5
+  // rows have no measurable direction and pass. 0: no width gate. No gate for blobs far
+  // narrower than the line: on real frames worn or blurred paint falls apart into such blobs.
+  double line_width_m = Defaults::line_width;
+  double line_width_factor = Defaults::line_width_factor;
   // Without a previous sighting, a band whose line pixels form several blobs leaves out the
   // blobs whose mean chroma (max - min channel) is below this fraction of the most saturated
   // blob's of at least min_pixels: on real floors a colour cast or glare lets patches of floor,
@@ -158,7 +175,11 @@ struct LineDetectorConfig {
 std::string validate(const LineDetectorConfig& config);
 
 struct BandMeasurement {
-  bool found = false;   // pixel_count >= min_pixels
+  // The band's fitted floor test: line pixels have min(R, G) - B >= this (0 without the test).
+  int min_yellowness = 0;
+  // pixel_count >= min_pixels and, where the band holds several blobs, one of those measured
+  // alone has min_pixels.
+  bool found = false;
   int pixel_count = 0;  // line pixels in the band: the lecture's m00 / 255
   // Centroid in full-image pixel coordinates (pixel index, as cv::moments); valid whenever
   // pixel_count > 0, including below min_pixels.
@@ -233,14 +254,15 @@ class LineDetector {
 
   // As detect(bgr), but keeps each band on the line `previous` (the last measurement) saw there:
   // when that band was found and its mask now holds several 8-connected blobs, only the blob
-  // nearest the previous centroid column is measured, so a line-coloured patch beside the line
-  // (tape, a reflection) does not pull the centroid. With one blob, or no previous sighting, the
-  // result is detect(bgr)'s, bit for bit (which leaves out weakly saturated blobs:
-  // LineDetectorConfig::blob_chroma_fraction).
+  // nearest the previous centroid column (of those the width gate keeps) is measured, so a
+  // line-coloured patch beside the line (tape, a reflection) does not pull the centroid. With one
+  // blob, or no previous sighting, the result is detect(bgr)'s, bit for bit (which leaves out
+  // weakly saturated blobs: LineDetectorConfig::blob_chroma_fraction).
   LineMeasurement detect(const cv::Mat& bgr, const LineMeasurement& previous) const;
 
-  // The lecture's mask: CV_8UC1 of the frame's size, 255 on line pixels inside the band(s),
-  // 0 elsewhere. Empty for frames detect() rejects.
+  // The lecture's mask: CV_8UC1 of the frame's size, 255 on line pixels inside the band(s) (the
+  // colour box and the floor test; before the blob rules), 0 elsewhere. Empty for frames detect()
+  // rejects.
   cv::Mat debugMask(const cv::Mat& bgr) const;
 
   // Draws onto the frame the line pixels (magenta), the band outlines (green; look-ahead cyan)
@@ -280,6 +302,23 @@ class LineDetector {
     }
   };
 
+  // Sums over a blob's rows of each row's extent (from its first pixel's left edge to its last
+  // pixel's right edge), for the blob's width across its direction on the floor. Where the image's
+  // side edge cuts the blob the extent is what is seen of it, less than its width.
+  struct RowExtents {
+    int rows = 0;
+    double width = 0.0, row = 0.0, row_squared = 0.0, middle = 0.0, row_middle = 0.0;
+    void add(double y, double left, double right) {
+      const double mid = 0.5 * (left + right);
+      ++rows;
+      width += right - left;
+      row += y;
+      row_squared += y * y;
+      middle += mid;
+      row_middle += y * mid;
+    }
+  };
+
   // The moments of a band's line pixels, divided by 255, and the rows that hold any; the same
   // moments of the pixels in whole runs (BandMeasurement::centre_x).
   struct BandSums {
@@ -287,6 +326,7 @@ class LineDetector {
     int occupied_rows = 0;
     std::int64_t whole_count = 0, whole_sum_x = 0, whole_sum_y = 0;
     std::vector<BandMeasurement::RowSpan> spans;
+    RowExtents extents;  // of all its rows, as if one blob
     // False once the rows' runs cannot all be one 8-connected blob: a row with two runs, a row
     // whose run does not touch the run in the row above, or line pixels again after an empty row.
     bool one_blob = true;
@@ -297,14 +337,23 @@ class LineDetector {
 
   BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band,
                               std::optional<double> expected_x) const;
+  // The floor test's threshold for rows [row_begin, row_end): LineDetectorConfig::floor_margin.
+  // 0 without the test; above 255 nothing passes.
+  int minYellowness(const cv::Mat& bgr, int row_begin, int row_end) const;
+  // Whether a blob of these row extents is too wide on the floor to be the line
+  // (LineDetectorConfig::line_width_factor); false where its width cannot be measured.
+  struct FloorScale;
+  bool tooWide(const RowExtents& extents, const std::optional<FloorScale>& scale) const;
+  std::optional<FloorScale> floorScale(const BandMeasurement& band) const;
   // The band's 8-connected blobs of line pixels, found from each row's runs (cheaper than
   // labelling a mask: a band holds a few dozen runs).
   struct Blobs;
-  // The sums of the blob nearest expected_x: among those whose columns come nearest it, the
-  // largest, so a speck of noise beside the line does not win.
-  static BandSums nearestBlobSums(const Blobs& blobs, double expected_x);
-  // The sums of the blobs blob_chroma_fraction keeps, or nothing when it keeps them all.
-  std::optional<BandSums> saturatedBlobSums(const Blobs& blobs) const;
+  // The blob nearest expected_x among the `candidates` (as a mask over the blobs): of those
+  // whose columns come nearest it, the largest, so a speck of noise beside the line does not win.
+  static std::vector<bool> nearestBlob(const Blobs& blobs, const std::vector<bool>& candidates,
+                                       double expected_x);
+  // The `candidates` blob_chroma_fraction keeps.
+  std::vector<bool> saturatedBlobs(const Blobs& blobs, const std::vector<bool>& candidates) const;
   void fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const;
 
   LineDetectorConfig config_;

@@ -1,6 +1,7 @@
 #include "follow_bot/line_detector.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -24,6 +25,10 @@ constexpr int kMaxBandRows = 1 << 16;
 // them is too uncertain to place its centre: on the 0.5 m level camera such sightings lay up to
 // 9 mm off the line, and the path law's bridges started from them (replayed; 4 rows did as well).
 constexpr int kMinCentreRows = 5;
+
+// The floor test samples every this many columns of every this many rows of the band: ~800
+// pixels of a 640-column, 20-row band, enough for the median and MAD to a level or two.
+constexpr int kFloorSampleStride = 4;
 
 const cv::Scalar kLinePixelColour(255, 0, 255);  // magenta
 const cv::Scalar kBandColour(0, 255, 0);         // green
@@ -59,6 +64,9 @@ cv::Vec3b pixelWithHueNumerator(int chroma, int shifted_numerator) {
 
 bool inside(int x, int low, int high) { return low <= x && x <= high; }
 
+// The floor test's channel: how much yellower than grey a pixel is, 0 for blue-ish ones.
+int yellowness(int b, int g, int r) { return std::max(std::min(g, r) - b, 0); }
+
 std::string checkColour(const char* name, const HsvColor& colour) {
   const int channels[] = {colour.h, colour.s, colour.v};
   const char* channel_names[] = {"h", "s", "v"};
@@ -92,15 +100,18 @@ std::string checkFrame(const cv::Mat& bgr) {
   return "";
 }
 
-// Calls visit(x, is_line) for the pixels of one BGR row that might be line pixels; every
-// pixel not visited is certainly not one. Sixteen pixels at a time are screened with
-// HsvBox::Screen in SIMD (most floor pixels fail it); the survivors get the exact test, whose
-// verdict is passed on rather than branched on, because near the box edges it is a coin toss
-// the branch predictor would lose.
+// Calls visit(x, is_line) for the pixels of one BGR row that might be line pixels: in the box
+// with yellowness >= min_yellowness (in [0, 255]). Every pixel not visited is certainly not
+// one. Sixteen pixels at a time are screened in SIMD with HsvBox::Screen and the yellowness,
+// exactly (most floor pixels fail); the survivors get the exact box test, whose verdict is
+// passed on rather than branched on, because near the box edges it is a coin toss the branch
+// predictor would lose.
 template <typename Visit>
-void visitCandidates(const HsvBox& box, const uchar* bgr_row, int cols, Visit&& visit) {
+void visitCandidates(const HsvBox& box, int min_yellowness, const uchar* bgr_row, int cols,
+                     Visit&& visit) {
   int x = 0;
 #if CV_SIMD128
+  const cv::v_uint8x16 min_yellow = cv::v_setall_u8(static_cast<uchar>(min_yellowness));
   const HsvBox::Screen& screen = box.screen();
   const cv::v_uint8x16 min_value = cv::v_setall_u8(static_cast<uchar>(screen.min_value));
   const cv::v_uint8x16 max_value = cv::v_setall_u8(static_cast<uchar>(screen.max_value));
@@ -132,11 +143,13 @@ void visitCandidates(const HsvBox& box, const uchar* bgr_row, int cols, Visit&& 
     cv::v_load_deinterleave(bgr_row + 3 * x, b, g, r);
     const cv::v_uint8x16 max = cv::v_max(cv::v_max(b, g), r);
     const cv::v_uint8x16 chroma = max - cv::v_min(cv::v_min(b, g), r);
+    const cv::v_uint8x16 yellow = cv::v_min(g, r) - b;  // saturates at 0, as yellowness()
     cv::v_uint16x8 max_low, max_high, chroma_low, chroma_high;
     cv::v_expand(max, max_low, max_high);
     cv::v_expand(chroma, chroma_low, chroma_high);
     const cv::v_uint8x16 passed =
         (cv::v_min(cv::v_max(max, min_value), max_value) == max) &
+        (cv::v_max(yellow, min_yellow) == yellow) &
         cv::v_pack(saturation_ok(max_low, chroma_low), saturation_ok(max_high, chroma_high));
     unsigned bits = cv::v_signmask(passed);
     if (bits == 0) continue;
@@ -161,7 +174,8 @@ void visitCandidates(const HsvBox& box, const uchar* bgr_row, int cols, Visit&& 
   }
 #endif
   for (const uchar* pixel = bgr_row + 3 * x; x < cols; ++x, pixel += 3) {
-    visit(x, box.contains(pixel[0], pixel[1], pixel[2]));
+    visit(x, box.contains(pixel[0], pixel[1], pixel[2]) &
+                 (yellowness(pixel[0], pixel[1], pixel[2]) >= min_yellowness));
   }
 }
 
@@ -372,6 +386,14 @@ std::string validate(const LineDetectorConfig& config) {
     message << "max_width_fraction must be in (0, 1], got " << config.max_width_fraction;
   } else if (!(config.blob_chroma_fraction >= 0.0 && config.blob_chroma_fraction <= 1.0)) {
     message << "blob_chroma_fraction must be in [0, 1], got " << config.blob_chroma_fraction;
+  } else if (!inside(config.floor_margin, 0, 255)) {
+    message << "floor_margin must be in [0, 255], got " << config.floor_margin;
+  } else if (!(config.floor_mads >= 0.0 && std::isfinite(config.floor_mads))) {
+    message << "floor_mads must be finite and >= 0, got " << config.floor_mads;
+  } else if (!(config.line_width_m > 0.0 && std::isfinite(config.line_width_m))) {
+    message << "line_width_m must be finite and > 0, got " << config.line_width_m;
+  } else if (!(config.line_width_factor >= 0.0 && std::isfinite(config.line_width_factor))) {
+    message << "line_width_factor must be finite and >= 0, got " << config.line_width_factor;
   }
   return message.str();
 }
@@ -401,6 +423,16 @@ LineMeasurement LineDetector::detect(const cv::Mat& bgr, const LineMeasurement& 
   return measurement;
 }
 
+// The floor's scale at a band's centre row: along a row the image is the floor scaled (a row
+// sees the floor at one depth), by metres_per_column, which changes from row to row; a row
+// further down sees the floor metres_per_row nearer.
+struct LineDetector::FloorScale {
+  double centre_column = 0.0;
+  double metres_per_column = 0.0;
+  double change_per_row = 0.0;  // of metres_per_column
+  double metres_per_row = 0.0;
+};
+
 // Line pixels of a band, row by row, grouped into 8-connected blobs.
 struct LineDetector::Blobs {
   struct Run {
@@ -414,6 +446,7 @@ struct LineDetector::Blobs {
   int count = 0;  // blobs
   std::vector<int> area, first_column, last_column;
   std::vector<std::int64_t> chroma;
+  std::vector<RowExtents> extents;
 
   // `columns`: each row's line pixels in increasing order, rows [row_begin, row_end) after each
   // other, `row_starts[i]` where row row_begin + i starts (one more entry at the end).
@@ -463,6 +496,7 @@ struct LineDetector::Blobs {
         first_column.push_back(runs[i].begin);
         last_column.push_back(runs[i].end);
         chroma.push_back(0);
+        extents.emplace_back();
       }
       Run& run = runs[i];
       run.blob = blob_of_root[r];
@@ -471,6 +505,20 @@ struct LineDetector::Blobs {
       last_column[run.blob] = std::max(last_column[run.blob], run.end);
       chroma[run.blob] += run.chroma;
     }
+    // Each blob's extent in each of its rows: its runs in a row come in column order.
+    std::vector<int> open_row(count, -1), open_first(count), open_last(count);
+    auto close_row = [&](int blob) {
+      extents[blob].add(open_row[blob], open_first[blob] - 0.5, open_last[blob] + 0.5);
+    };
+    for (const Run& run : runs) {
+      if (open_row[run.blob] != run.row) {
+        if (open_row[run.blob] >= 0) close_row(run.blob);
+        open_row[run.blob] = run.row;
+        open_first[run.blob] = run.begin;
+      }
+      open_last[run.blob] = run.end;
+    }
+    for (int blob = 0; blob < count; ++blob) close_row(blob);
   }
 
   // The band's sums over the pixels of the kept blobs.
@@ -498,10 +546,14 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   result.distance_m = placement.distance_m;
   result.clamped = placement.clamped;
   const int band_rows = result.row_end - result.row_begin;
+  result.min_yellowness = minYellowness(bgr, result.row_begin, result.row_end);
+  if (result.min_yellowness > 255) return result;  // the floor is as yellow as paint gets
 
   // Each row's line pixel columns, kept in case a blob has to be picked out of the band. Every
   // candidate is written and only line pixels advance the end: no branch on the coin toss.
-  const bool may_pick = (expected_x || config_.blob_chroma_fraction > 0.0) && band_rows > 0;
+  const bool gate_widths = config_.line_width_factor > 0.0;
+  const bool may_pick =
+      (expected_x || config_.blob_chroma_fraction > 0.0 || gate_widths) && band_rows > 0;
   // Left uninitialised: only the entries below `end` are ever read.
   const std::unique_ptr<int[]> columns(may_pick ? new int[static_cast<size_t>(band_rows) * bgr.cols]
                                                 : nullptr);
@@ -513,48 +565,131 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   for (int y = result.row_begin; y < result.row_end; ++y) {
     RowSums row;
     if (may_pick) {
-      visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols, [&](int x, bool is_line) {
-        row.add(x, is_line);
-        columns[end] = x;
-        end += is_line ? 1 : 0;
-      });
+      visitCandidates(box_, result.min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
+                      [&](int x, bool is_line) {
+                        row.add(x, is_line);
+                        columns[end] = x;
+                        end += is_line ? 1 : 0;
+                      });
       row_starts[y - result.row_begin + 1] = end;
     } else {
-      visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, result.min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) { row.add(x, is_line); });
     }
     sums.addRow(y, row, bgr.cols);
   }
+  const std::optional<FloorScale> scale =
+      gate_widths && sums.count > 0 ? floorScale(result) : std::nullopt;
   if (may_pick && !sums.one_blob) {
     const Blobs blobs(bgr, columns.get(), row_starts, result.row_begin);
-    sums =
-        expected_x ? nearestBlobSums(blobs, *expected_x) : saturatedBlobSums(blobs).value_or(sums);
+    std::vector<bool> candidates(blobs.count);
+    for (int blob = 0; blob < blobs.count; ++blob) {
+      candidates[blob] = !tooWide(blobs.extents[blob], scale);
+    }
+    const std::vector<bool> kept = expected_x ? nearestBlob(blobs, candidates, *expected_x)
+                                              : saturatedBlobs(blobs, candidates);
+    int largest = 0;
+    for (int blob = 0; blob < blobs.count; ++blob) {
+      largest = std::max(largest, kept[blob] ? blobs.area[blob] : 0);
+    }
+    if (std::find(kept.begin(), kept.end(), false) != kept.end()) sums = blobs.sums(kept);
+    fillBand(sums, bgr.cols, &result);
+    // Specks (of floor between blobs the gates left out, or noise) add up to no line.
+    result.found = result.found && largest >= config_.min_pixels;
+    return result;
   }
+  if (tooWide(sums.extents, scale)) sums = BandSums();
   fillBand(sums, bgr.cols, &result);
   return result;
 }
 
-LineDetector::BandSums LineDetector::nearestBlobSums(const Blobs& blobs, double expected_x) {
-  int best = 0;
+int LineDetector::minYellowness(const cv::Mat& bgr, int row_begin, int row_end) const {
+  if (config_.floor_margin == 0) return 0;
+  std::array<int, 256> histogram{};
+  int samples = 0;
+  for (int y = row_begin; y < row_end; y += kFloorSampleStride) {
+    const uchar* row = bgr.ptr<uchar>(y);
+    for (int x = 0; x < bgr.cols; x += kFloorSampleStride) {
+      const uchar* pixel = row + 3 * x;
+      ++histogram[yellowness(pixel[0], pixel[1], pixel[2])];
+      ++samples;
+    }
+  }
+  if (samples == 0) return 0;
+  const int half = (samples + 1) / 2;
+  int median = 0;
+  for (int below = histogram[0]; below < half;) below += histogram[++median];
+  // The median absolute deviation: the smallest d with half the samples within median +- d.
+  int mad = 0;
+  for (int within = histogram[median]; within < half;) {
+    ++mad;
+    within += (median - mad >= 0 ? histogram[median - mad] : 0) +
+              (median + mad <= 255 ? histogram[median + mad] : 0);
+  }
+  return median +
+         std::max(config_.floor_margin, static_cast<int>(std::ceil(config_.floor_mads * mad)));
+}
+
+std::optional<LineDetector::FloorScale> LineDetector::floorScale(
+    const BandMeasurement& band) const {
+  const double centre_row = 0.5 * (band.row_begin + band.row_end - 1);
+  const double u = camera_.cx;
+  const std::optional<cv::Point2d> above = pixelToGround(camera_, u, centre_row - 0.5);
+  const std::optional<cv::Point2d> below = pixelToGround(camera_, u, centre_row + 0.5);
+  const std::optional<cv::Point2d> above_right = pixelToGround(camera_, u + 1.0, centre_row - 0.5);
+  const std::optional<cv::Point2d> below_right = pixelToGround(camera_, u + 1.0, centre_row + 0.5);
+  if (!above || !below || !above_right || !below_right) return std::nullopt;
+  const double above_scale = std::abs(above_right->y - above->y);
+  const double below_scale = std::abs(below_right->y - below->y);
+  return FloorScale{u, 0.5 * (above_scale + below_scale), below_scale - above_scale,
+                    std::abs(above->x - below->x)};
+}
+
+bool LineDetector::tooWide(const RowExtents& extents,
+                           const std::optional<FloorScale>& scale) const {
+  // Over fewer rows the blob's direction, and so its width across it, is not measured.
+  if (!scale || extents.rows < kMinCentreRows) return false;
+  const double n = extents.rows;
+  const double mean_row = extents.row / n;
+  const double mean_middle = extents.middle / n;
+  // The blob's direction: its rows' middles' drift per row, a least-squares line, taken onto the
+  // floor, where a row's columns shift by the drift and by the row's change of scale.
+  const double drift = (extents.row_middle / n - mean_row * mean_middle) /
+                       (extents.row_squared / n - mean_row * mean_row);
+  const double across_per_row = drift * scale->metres_per_column +
+                                (mean_middle - scale->centre_column) * scale->change_per_row;
+  const double slope = across_per_row / scale->metres_per_row;
+  // A run cuts the blob along the row; across its direction it is cos(atan(slope)) as wide.
+  const double width =
+      extents.width / n * scale->metres_per_column / std::sqrt(1.0 + slope * slope);
+  return width > config_.line_width_factor * config_.line_width_m;
+}
+
+std::vector<bool> LineDetector::nearestBlob(const Blobs& blobs, const std::vector<bool>& candidates,
+                                            double expected_x) {
+  int best = -1;
   double best_distance = 0.0;
   for (int blob = 0; blob < blobs.count; ++blob) {
+    if (!candidates[blob]) continue;
     const double distance = std::max(
         {0.0, blobs.first_column[blob] - expected_x, expected_x - blobs.last_column[blob]});
-    if (blob == 0 || distance < best_distance ||
+    if (best < 0 || distance < best_distance ||
         (distance == best_distance && blobs.area[blob] > blobs.area[best])) {
       best = blob;
       best_distance = distance;
     }
   }
   std::vector<bool> kept(blobs.count, false);
-  kept[best] = true;
-  return blobs.sums(kept);
+  if (best >= 0) kept[best] = true;
+  return kept;
 }
 
-std::optional<LineDetector::BandSums> LineDetector::saturatedBlobSums(const Blobs& blobs) const {
+std::vector<bool> LineDetector::saturatedBlobs(const Blobs& blobs,
+                                               const std::vector<bool>& candidates) const {
   std::vector<double> mean_chroma(blobs.count);
   double strongest = 0.0, strongest_line_sized = 0.0;
   for (int blob = 0; blob < blobs.count; ++blob) {
+    if (!candidates[blob]) continue;
     mean_chroma[blob] = static_cast<double>(blobs.chroma[blob]) / blobs.area[blob];
     strongest = std::max(strongest, mean_chroma[blob]);
     if (blobs.area[blob] >= config_.min_pixels) {
@@ -564,17 +699,15 @@ std::optional<LineDetector::BandSums> LineDetector::saturatedBlobSums(const Blob
   const double bar = config_.blob_chroma_fraction *
                      (strongest_line_sized > 0.0 ? strongest_line_sized : strongest);
   std::vector<bool> kept(blobs.count);
-  bool all_kept = true;
   for (int blob = 0; blob < blobs.count; ++blob) {
-    kept[blob] = mean_chroma[blob] >= bar;
-    all_kept = all_kept && kept[blob];
+    kept[blob] = candidates[blob] && mean_chroma[blob] >= bar;
   }
-  if (all_kept) return std::nullopt;
-  return blobs.sums(kept);
+  return kept;
 }
 
 void LineDetector::BandSums::addRow(int y, const RowSums& row, int image_width) {
   if (row.count > 0) {
+    extents.add(y, row.first - 0.5, row.last + 0.5);
     const bool touches_previous =
         previous_row_occupied && row.first <= previous_last + 1 && row.last >= previous_first - 1;
     one_blob = one_blob && row.runs == 1 && (count == 0 || touches_previous);
@@ -640,9 +773,11 @@ cv::Mat LineDetector::debugMask(const cv::Mat& bgr) const {
   cv::Mat mask(bgr.size(), CV_8UC1, cv::Scalar::all(0));
   auto mark_band = [&](const BandConfig& band) {
     const BandPlacement placement = placeBand(camera_, band, bgr.rows);
+    const int min_yellowness = minYellowness(bgr, placement.row_begin, placement.row_end);
+    if (min_yellowness > 255) return;
     for (int y = placement.row_begin; y < placement.row_end; ++y) {
       uchar* mask_row = mask.ptr<uchar>(y);
-      visitCandidates(box_, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) { mask_row[x] = is_line ? 255 : 0; });
     }
   };

@@ -38,6 +38,10 @@ FollowerSettings followerSettings(const FollowerConfig& cfg) {
   detector.look_ahead = {cfg.look_ahead_distance, cfg.band_rows};
   detector.min_pixels = cfg.min_pixels;
   detector.blob_chroma_fraction = cfg.blob_chroma_fraction;
+  detector.floor_margin = cfg.floor_margin;
+  detector.floor_mads = cfg.floor_mads;
+  detector.line_width_m = cfg.line_width;
+  detector.line_width_factor = cfg.line_width_factor;
 
   SteeringConfig& steering = settings.steering;
   steering.mode = parseChoice("mode", cfg.mode, parseSteeringMode, "'lecture', 'pd' or 'path'");
