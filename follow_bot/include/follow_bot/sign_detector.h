@@ -49,12 +49,15 @@ struct SignDetectorConfig {
   int track_window_px = 21;           // side of the Lucas-Kanade window (odd)
   int track_levels = 3;               // pyramid levels above full resolution
   double max_track_motion_px = 80.0;  // a corner of the sign moving further: lost, search again
-  // A tracked frame starts from the last frame's homography, tilt error included: seen face-on
-  // from afar (tilt at the alignment's noise floor) a short alignment kept most of it, and the
-  // error then wandered from frame to frame with the CPU's SIMD kernels (3.5 deg at 3 m without
-  // AVX2, 0.5 with). Aligned to convergence, a tracked frame forgets where it started.
-  int track_refine_passes = 4;       // render-and-align passes on a tracked frame, all required
-  int track_refine_iterations = 30;  // ECC iteration limit per pass on a tracked frame
+  // A tracked frame starts the alignment within a fraction of a pixel, so it needs fewer passes
+  // and iterations than a searched one (ECC is most of a frame's cost).
+  int track_refine_passes = 1;      // render-and-align passes on a tracked frame, all required
+  int track_refine_iterations = 5;  // ECC iteration limit per pass on a tracked frame
+  // ... except a sign seen narrower than this (pixels; 111 px at 2 m for the harness camera):
+  // there its tilt is at the alignment's noise floor, a short alignment kept most of the last
+  // frame's tilt error and the error wandered from frame to frame with the CPU's SIMD kernels
+  // (3.5 deg at 3 m without AVX2, 0.5 with). Such a tracked frame is aligned to convergence.
+  double track_converge_below_px = 120.0;
 };
 
 // Empty when the configuration is usable (the image itself is checked by the constructor),
