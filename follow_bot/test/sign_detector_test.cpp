@@ -294,6 +294,10 @@ TEST_F(SignDetectorTest, StartupErrors) {
   no_track_iterations.track_refine_iterations = 0;
   EXPECT_NE(expectThrow(no_track_iterations).find("track_refine_iterations must be >= 1"),
             std::string::npos);
+  SignDetectorConfig converge_below = config();
+  converge_below.track_converge_below_px = -1.0;
+  EXPECT_NE(expectThrow(converge_below).find("track_converge_below_px must be >= 0"),
+            std::string::npos);
   SignDetectorConfig far_motion = config();
   far_motion.max_track_motion_px = 0.0;
   EXPECT_NE(expectThrow(far_motion).find("max_track_motion_px must be > 0"), std::string::npos);
