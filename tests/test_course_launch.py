@@ -75,7 +75,8 @@ def test_ctrl_c_ends_with_a_zero_twist(lockstep):
         deadline = time.monotonic() + 90.0
         while True:
             line = twists.next(deadline)
-            assert line is not None, "the follower never drove"
+            seen = f"{twists.seen[-3:]}, roslaunch: {output.drain()[-15:]}"
+            assert line is not None, f"the follower never drove: {seen}"
             values = twist_values(line)
             if values and values[0] > 0.2:
                 break
