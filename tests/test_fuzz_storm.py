@@ -1,6 +1,9 @@
 """A short seeded storm (harness.fuzz, 1,000 messages per node: random and malformed Images,
-random CameraInfo and odometry) against every node, so a crash regression cannot land.
-`make fuzz` runs the long one (10,000 per node). Prints the per-node counts."""
+random CameraInfo and odometry) against every node, so a crash regression cannot land, and the
+node's own counters on /diagnostics held against what the fuzzer knows it sent: every malformed
+frame dropped under its reason, every valid one accepted, every camera_info taken or refused as
+built (a node that drops everything, or drops under the wrong reason, fails). `make fuzz` runs
+the long one (10,000 per node). Prints the per-node counts."""
 
 from __future__ import annotations
 
@@ -43,3 +46,11 @@ def test_storm_leaves_the_node_alive_correct_and_its_twists_sane(storm, node):
     assert r["probe"] == "ok"
     assert r["non_finite"] == 0
     assert r["over_limit"] == 0
+
+
+@pytest.mark.parametrize("node", list(NODES))
+def test_storm_every_message_counted_by_the_node_under_its_outcome(storm, node):
+    r = storm[1][node]
+    assert r["expected"] is not None, "the storm sends only messages of known fate"
+    assert r["expected"]["frames_accepted"] > 0 and r["expected"]["dropped_bad_size"] > 0
+    assert r["count_errors"] == [], (r["counts"], r["expected"])

@@ -4,7 +4,12 @@ cmd_vel only while it steers, one zero when it stops, ~enable turns it off and o
 
 Each case starts a roscore and one node, then plays frames from a child process (this file with
 --client CASE) in lockstep on the node's ~status: publish a frame, wait for its status (and
-for the cmd_vel that status says went out). The child prints what it saw as JSON.
+for the cmd_vel that status says went out). The child prints what it saw as JSON. No wall-clock
+window decides anything: the first frame waits for the node's /diagnostics to count the
+camera_info taken, and the nodes run with their frame watchdogs raised (a loaded machine can
+hold the client longer than the default 0.15 s between two frames, and a watchdog's zero would
+be a cmd_vel no frame asked for), except the idle panorama's, whose silence when the frames
+stop is part of its case.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ class Lockstep:
 
     def __init__(self, node: str):
         import rospy
+        from diagnostic_msgs.msg import DiagnosticArray
         from geometry_msgs.msg import Twist
         from nav_msgs.msg import Odometry
         from sensor_msgs.msg import CameraInfo, Image
@@ -38,12 +44,15 @@ class Lockstep:
 
         self.cond = threading.Condition()
         self.statuses: list = []
+        self.diagnostics: dict = {}  # the node's latest "<node>: behaviour" status
         self.twists: list[tuple[float, float, float]] = []  # (wall, linear, angular)
         self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=10)
         info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1, latch=True)
         odom_pub = rospy.Publisher("/odom", Odometry, queue_size=1, latch=True)
         self.status_sub = rospy.Subscriber(f"/{node}/status", BehaviourStatus, self._on_status)
         self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self._on_twist)
+        self.diagnostics_name = f"{node}: behaviour"
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diagnostics)
         info_pub.publish(camera_info_msg())
         odom_pub.publish(odom_msg(0.0))
         deadline = time.monotonic() + 30
@@ -53,13 +62,26 @@ class Lockstep:
             and self.cmd_sub.get_num_connections()
         ):
             time.sleep(0.05)
-        time.sleep(0.3)
+        taken = self.wait_diagnostics(lambda d: d.get("camera_info_accepted") == "1")
+        assert taken, f"the node never took the camera_info: {self.diagnostics}"
         self.t = 1000.0  # frame stamps, s: 1/RATE apart whatever the wall clock does
 
     def _on_status(self, msg) -> None:
         with self.cond:
             self.statuses.append(msg)
             self.cond.notify_all()
+
+    def _on_diagnostics(self, array) -> None:
+        for s in array.status:
+            if s.name == self.diagnostics_name:
+                with self.cond:
+                    self.diagnostics = {"message": s.message, **{v.key: v.value for v in s.values}}
+                    self.cond.notify_all()
+
+    def wait_diagnostics(self, predicate, timeout: float = 20.0) -> bool:
+        """Whether the node's diagnostics came to satisfy `predicate` within `timeout` s."""
+        with self.cond:
+            return self.cond.wait_for(lambda: predicate(self.diagnostics), timeout)
 
     def _on_twist(self, msg) -> None:
         with self.cond:
@@ -117,7 +139,10 @@ def client(case: str) -> dict:
         steps = Lockstep("panorama")
         for _ in range(int(10 * RATE)):  # 10 s of frames at 30 Hz, no capture
             steps.frame(probe_frame("idle"), wall_rate=True)
-        time.sleep(0.5)  # the watchdog has seen the frames stop too
+        # The watchdog has seen the frames stop too, and sent nothing: there was nothing to stop.
+        out["outage_seen"] = steps.wait_diagnostics(
+            lambda d: d.get("message", "").startswith("no frames, idle: nothing to stop")
+        )
     elif case == "follower_gives_up":
         steps = Lockstep("follower")
         # A mux-like priority node: the behaviour's cmd_vel wins over teleop while it has spoken
@@ -153,15 +178,12 @@ def client(case: str) -> dict:
         before = len(steps.twists)
         reply = enable(False)
         out["disable_reply"] = [reply.success, reply.message]
-        # The zero is published by the call itself, before the next frame; any second Twist
-        # would come within the wait after it.
-        with steps.cond:
-            steps.cond.wait_for(lambda: len(steps.twists) > before, 10.0)
-        time.sleep(0.2)
-        out["twists_at_disable"] = steps.twists[before:]
+        # The zero is published by the call itself, before the next frame; a second Twist would
+        # come while the disabled frames are answered.
         out["disabled_from"] = len(steps.statuses)
         for _ in range(30):
             steps.frame(probe_frame("line"))
+        out["twists_at_disable"] = steps.twists[before:]
         out["enabled_from"] = len(steps.statuses)
         enable(True)
         for _ in range(30):
@@ -180,17 +202,23 @@ def client(case: str) -> dict:
     return out
 
 
-# No robot description here: every node takes its camera's mounting from its ~params.
+# No robot description here: every node takes its camera's mounting from its ~params. Frame
+# watchdogs raised (see the module's docstring), on wall time as on ROS time: there is no /clock.
+RAISED_WATCHDOGS = ["_watchdog_timeout:=10", "_wall_watchdog_timeout:=10"]
 NODES = {
     "panorama_idle": ["follow_bot", "panorama", "_camera_mounting:=params"],
-    "follower_gives_up": ["follow_bot", "follower", "_mode:=pd", "_camera_mounting:=params"],
-    "follower_enable": ["follow_bot", "follower", "_mode:=pd", "_camera_mounting:=params"],
+    "follower_gives_up": [
+        "follow_bot", "follower", "_mode:=pd", "_camera_mounting:=params", *RAISED_WATCHDOGS,
+    ],
+    "follower_enable": [
+        "follow_bot", "follower", "_mode:=pd", "_camera_mounting:=params", *RAISED_WATCHDOGS,
+    ],
     # The standoff is the probe tag's distance (fuzz.expected_range("tag"), camera at the base
     # origin, level), tolerances wide enough that its quantised pose counts as parked.
     "parker_parked": [
         "follow_bot", "parker", "_standoff:=1.7321", "_camera_x_offset:=0.0",
         "_camera_pitch_deg:=0", "_position_tolerance:=0.05", "_lateral_tolerance:=0.05",
-        "_heading_tolerance_deg:=5", "_camera_mounting:=params",
+        "_heading_tolerance_deg:=5", "_camera_mounting:=params", *RAISED_WATCHDOGS,
     ],
 }  # fmt: skip
 
@@ -205,6 +233,7 @@ def sent_commands(result: dict, start: int = 0) -> list[tuple[float, float]]:
 
 def test_idle_panorama_sends_no_cmd_vel_in_10_s_but_answers_every_frame():
     result = play("panorama_idle")
+    assert result["outage_seen"], "the watchdog never saw the frames stop"
     assert result["twists"] == []
     assert len(result["statuses"]) == 300
     assert all(s[:2] == [False, False] and s[4] == "idle" for s in result["statuses"])

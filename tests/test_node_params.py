@@ -306,7 +306,11 @@ KNOWN = {
     "follow_bot beacon_chaser": [*COMMON, "_target_shape:=box", "_target_size:=1.8"],
     "follow_bot parker": [*COMMON, "_tag_size:=0.2", "_target:=apriltag"],
     "follow_bot panorama": [*COMMON, "_detector:=orb", "_step_angle_deg:=20"],
-    "image_converter image_converter": ["_image_transport:=raw", "_circle_radius:=10"],
+    "image_converter image_converter": [
+        "_image_transport:=raw",
+        "_circle_radius:=10",
+        "_diagnostic_period:=1",
+    ],
 }
 
 

@@ -1,4 +1,5 @@
-// rostest: the follower node through its topics (wall time, no simulator).
+// rostest: the follower node through its topics (wall time, no simulator), in lockstep on its
+// answers (node_answers.h).
 #include <geometry_msgs/Twist.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
@@ -11,35 +12,15 @@
 #include <opencv2/imgproc.hpp>
 
 #include "frame_msg.h"
+#include "node_answers.h"
 
 namespace {
 
 class FollowerNode : public ::testing::Test {
  protected:
   void SetUp() override {
-    images_ = nh_.advertise<sensor_msgs::Image>("/camera/rgb/image_raw", 10);
-    commands_ = nh_.subscribe("/cmd_vel", 100, &FollowerNode::onCommand, this);
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(20.0);
-    while ((images_.getNumSubscribers() == 0 || commands_.getNumPublishers() == 0) &&
-           ros::WallTime::now() < deadline) {
-      ros::WallDuration(0.01).sleep();
-    }
-    ASSERT_GT(images_.getNumSubscribers(), 0u) << "follower never subscribed to the camera";
-    ASSERT_GT(commands_.getNumPublishers(), 0u) << "follower never advertised /cmd_vel";
-  }
-
-  void onCommand(const geometry_msgs::TwistConstPtr& msg) { received_.push_back(*msg); }
-
-  // Publishes a frame and collects what arrives within `wait` seconds.
-  std::vector<geometry_msgs::Twist> send(const sensor_msgs::Image& msg, double wait = 0.2) {
-    received_.clear();
-    images_.publish(msg);
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(wait);
-    while (ros::WallTime::now() < deadline) {
-      ros::spinOnce();
-      ros::WallDuration(0.002).sleep();
-    }
-    return received_;
+    ASSERT_TRUE(follower_.connect()) << "follower never connected";
+    ASSERT_TRUE(watchdog_.connect()) << "follower_watchdog never connected";
   }
 
   sensor_msgs::Image frame(const cv::Mat& bgr) {
@@ -48,9 +29,12 @@ class FollowerNode : public ::testing::Test {
   }
 
   ros::NodeHandle nh_;
-  ros::Publisher images_;
-  ros::Subscriber commands_;
-  std::vector<geometry_msgs::Twist> received_;
+  // Raised frame watchdogs (follower_node.test): its answers are the frames' alone.
+  follow_bot::test::NodeAnswers follower_{nh_, "/follower", "/camera/rgb/image_raw",
+                                          "/camera/rgb/camera_info", "/cmd_vel"};
+  // The default watchdogs, for the test of frames stopping.
+  follow_bot::test::NodeAnswers watchdog_{nh_, "/follower_watchdog", "/watchdog/image",
+                                          "/watchdog/camera_info", "/watchdog/cmd_vel"};
   ros::Time stamp_{1000.0};
 };
 
@@ -70,10 +54,11 @@ bool finiteAndLimited(const geometry_msgs::Twist& t) {
 TEST_F(FollowerNode, AnswersEveryFrameWithExactlyOneTwistAndSteersTowardTheLine) {
   double last_angular = 0.0;
   for (int i = 0; i < 20; ++i) {
-    const auto replies = send(frame(floorWithLine(480)), 0.1);
-    ASSERT_EQ(replies.size(), 1u) << "frame " << i;
-    EXPECT_TRUE(finiteAndLimited(replies[0]));
-    last_angular = replies[0].angular.z;
+    const auto answer = follower_.send(frame(floorWithLine(480)));
+    ASSERT_TRUE(answer.status) << "frame " << i << " unanswered";
+    ASSERT_EQ(answer.twists.size(), 1u) << "frame " << i;
+    EXPECT_TRUE(finiteAndLimited(answer.twists[0]));
+    last_angular = answer.twists[0].angular.z;
   }
   EXPECT_LT(last_angular, -0.05) << "line right of centre must turn right (negative yaw rate)";
 }
@@ -83,41 +68,34 @@ TEST_F(FollowerNode, DefinedAnswersForFramesWithoutALine) {
   const cv::Mat yellow(480, 640, CV_8UC3, cv::Scalar(0, 220, 255));
   const cv::Mat tiny = floorWithLine(5, 12, 8);  // smaller than the band
   for (const cv::Mat* image : {&grey, &yellow, &tiny}) {
-    const auto replies = send(frame(*image), 0.1);
-    ASSERT_EQ(replies.size(), 1u);
-    EXPECT_TRUE(finiteAndLimited(replies[0]));
+    const auto answer = follower_.send(frame(*image));
+    ASSERT_TRUE(answer.status);
+    ASSERT_EQ(answer.twists.size(), 1u);
+    EXPECT_TRUE(finiteAndLimited(answer.twists[0]));
   }
 }
 
-TEST_F(FollowerNode, MalformedFramesNeverProduceMotionAndTheNodeSurvives) {
+TEST_F(FollowerNode, MalformedFramesAreDroppedWithoutMotionAndTheNodeSurvives) {
   const sensor_msgs::Image good = frame(floorWithLine(320));
   const std::vector<sensor_msgs::Image> bad = follow_bot::test::malformedFrames(good);
-  for (const auto& msg : bad) {
-    for (const auto& reply : send(msg, 0.1)) {
-      // Only the watchdog may speak here, and it only ever says stop.
-      EXPECT_EQ(reply.linear.x, 0.0);
-      EXPECT_EQ(reply.angular.z, 0.0);
-    }
-    // The good frame's answer comes last; the watchdog's one stop may precede it, since bad
-    // frames do not count as frames.
-    const auto replies = send(frame(floorWithLine(320)), 0.2);
-    ASSERT_GE(replies.size(), 1u) << "follower stopped answering";
-    ASSERT_LE(replies.size(), 2u);
-    if (replies.size() == 2) EXPECT_EQ(replies[0].linear.x, 0.0);
+  for (size_t i = 0; i < bad.size(); ++i) {
+    const auto during = follower_.sendDropped(bad[i]);
+    ASSERT_TRUE(during) << "malformed frame " << i << " never counted as dropped";
+    EXPECT_TRUE(during->empty()) << "a Twist for malformed frame " << i;
+    // The good frame after it gets its one answer.
+    const auto answer = follower_.send(frame(floorWithLine(320)));
+    ASSERT_TRUE(answer.status) << "follower stopped answering";
+    ASSERT_EQ(answer.twists.size(), 1u);
   }
 }
 
 TEST_F(FollowerNode, StopsOnceWhenFramesStopAndThenStaysSilent) {
-  for (int i = 0; i < 10; ++i) send(frame(floorWithLine(320)), 0.03);
-  received_.clear();
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(1.5);
-  while (ros::WallTime::now() < deadline) {
-    ros::spinOnce();
-    ros::WallDuration(0.005).sleep();
-  }
-  ASSERT_EQ(received_.size(), 1u) << "expected exactly one stop command";
-  EXPECT_EQ(received_[0].linear.x, 0.0);
-  EXPECT_EQ(received_[0].angular.z, 0.0);
+  for (int i = 0; i < 10; ++i) ASSERT_TRUE(watchdog_.send(frame(floorWithLine(320))).status);
+  watchdog_.clearTwists();
+  const auto& stops = watchdog_.twistsAfter(1.5);  // the watchdog's test: silence is the answer
+  ASSERT_EQ(stops.size(), 1u) << "expected exactly one stop command";
+  EXPECT_EQ(stops[0].linear.x, 0.0);
+  EXPECT_EQ(stops[0].angular.z, 0.0);
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include "follow_bot_common/image_frame.h"
+#include "follow_bot_common/frame_counts.h"
 
 #include <gtest/gtest.h>
 
@@ -49,6 +50,7 @@ struct MalformedCase {
   std::size_t data_size;
   const char* encoding;
   const char* expected_words;
+  FrameOutcome outcome;
 };
 
 class CheckFrameRejects : public ::testing::TestWithParam<MalformedCase> {};
@@ -59,24 +61,29 @@ TEST_P(CheckFrameRejects, NamesTheProblem) {
   const FrameCheck check = checkFrame(frameOf(data, c.width, c.height, c.step, c.encoding));
   ASSERT_FALSE(check.ok());
   EXPECT_NE(check.error.find(c.expected_words), std::string::npos) << check.error;
+  EXPECT_EQ(check.outcome, c.outcome) << check.error;
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Malformed, CheckFrameRejects,
-    ::testing::Values(MalformedCase{"zero_width", 0, 4, 0, 0, "bgr8", "empty image"},
-                      MalformedCase{"zero_height", 4, 0, 12, 0, "bgr8", "empty image"},
-                      MalformedCase{"short_step", 4, 4, 11, 44, "bgr8", "step 11"},
-                      MalformedCase{"short_step_mono16", 4, 4, 4, 16, "mono16", "step 4"},
-                      // cv::Mat throws on a 16-bit row that is not a whole number of values.
-                      MalformedCase{"odd_step_mono16", 8, 4, 17, 68, "mono16",
-                                    "step 17 is not a multiple of 2 bytes"},
-                      MalformedCase{"truncated", 4, 4, 12, 47, "bgr8", "data size 47"},
-                      MalformedCase{"oversized", 4, 4, 12, 49, "bgr8", "data size 49"},
-                      MalformedCase{"absurd", 100000, 2, 300000, 600000, "bgr8",
-                                    "absurd dimensions"},
-                      MalformedCase{"bayer", 4, 4, 4, 16, "bayer_rggb8", "unsupported encoding"},
-                      MalformedCase{"float", 4, 4, 16, 64, "32FC1", "unsupported encoding"},
-                      MalformedCase{"yuv", 4, 4, 8, 32, "yuv422", "unsupported encoding"}),
+    ::testing::Values(
+        MalformedCase{"zero_width", 0, 4, 0, 0, "bgr8", "empty image", FrameOutcome::kBadSize},
+        MalformedCase{"zero_height", 4, 0, 12, 0, "bgr8", "empty image", FrameOutcome::kBadSize},
+        MalformedCase{"short_step", 4, 4, 11, 44, "bgr8", "step 11", FrameOutcome::kBadSize},
+        MalformedCase{"short_step_mono16", 4, 4, 4, 16, "mono16", "step 4", FrameOutcome::kBadSize},
+        // cv::Mat throws on a 16-bit row that is not a whole number of values.
+        MalformedCase{"odd_step_mono16", 8, 4, 17, 68, "mono16",
+                      "step 17 is not a multiple of 2 bytes", FrameOutcome::kBadSize},
+        MalformedCase{"truncated", 4, 4, 12, 47, "bgr8", "data size 47", FrameOutcome::kBadSize},
+        MalformedCase{"oversized", 4, 4, 12, 49, "bgr8", "data size 49", FrameOutcome::kBadSize},
+        MalformedCase{"absurd", 100000, 2, 300000, 600000, "bgr8", "absurd dimensions",
+                      FrameOutcome::kBadSize},
+        MalformedCase{"bayer", 4, 4, 4, 16, "bayer_rggb8", "unsupported encoding",
+                      FrameOutcome::kBadEncoding},
+        MalformedCase{"float", 4, 4, 16, 64, "32FC1", "unsupported encoding",
+                      FrameOutcome::kBadEncoding},
+        MalformedCase{"yuv", 4, 4, 8, 32, "yuv422", "unsupported encoding",
+                      FrameOutcome::kBadEncoding}),
     [](const ::testing::TestParamInfo<MalformedCase>& info) { return info.param.name; });
 
 // One pixel with blue 10, green 20, red 30 in every colour encoding must come out identical.
@@ -115,16 +122,31 @@ TEST(CheckFrame, PaddedMono16RowsAndEveryStampAreAccepted) {
   frame.stamp_sec = 0xFFFFFFFFu;
   frame.stamp_nsec = 999999999u;
   EXPECT_TRUE(checkFrame(frame).ok()) << checkFrame(frame).error;
+  EXPECT_EQ(checkFrame(frame).outcome, FrameOutcome::kAccepted);
   frame.stamp_nsec = 1000000000u;
   EXPECT_NE(checkFrame(frame).error.find("nanoseconds 1000000000"), std::string::npos);
+  EXPECT_EQ(checkFrame(frame).outcome, FrameOutcome::kBadStamp);
 }
 
-TEST(ProblemKind, OneKindPerProblemWhateverTheValues) {
-  EXPECT_EQ(problemKind("step 17 is not a multiple of 2 bytes (one mono16 value)"),
-            "step N is not a multiple of N bytes");
-  EXPECT_EQ(problemKind("unsupported encoding 'x' (supported: ...)"), "unsupported encoding");
-  EXPECT_EQ(problemKind("data size 47 != height x step (48)"), "data size N != height x step");
-  EXPECT_EQ(problemKind(""), "other");
+TEST(FrameCounts, EachFrameOnceUnderItsOutcome) {
+  FrameCounts counts;
+  for (const FrameOutcome outcome :
+       {FrameOutcome::kAccepted, FrameOutcome::kAccepted, FrameOutcome::kBadEncoding,
+        FrameOutcome::kBadSize, FrameOutcome::kBadSize, FrameOutcome::kBadSize,
+        FrameOutcome::kBadStamp, FrameOutcome::kSizeMismatch, FrameOutcome::kError}) {
+    counts.countFrame(outcome);
+  }
+  counts.countCameraInfo(true);
+  counts.countCameraInfo(false);
+  counts.countCameraInfo(false);
+  EXPECT_EQ(counts.framesDropped(), 7);
+  const std::vector<std::pair<std::string, long>> expected = {
+      {"frames_accepted", 2},   {"dropped_bad_encoding", 1},  {"dropped_bad_size", 3},
+      {"dropped_bad_stamp", 1}, {"dropped_size_mismatch", 1}, {"dropped_error", 1}};
+  EXPECT_EQ(counts.frameValues(), expected);
+  const std::vector<std::pair<std::string, long>> camera_info = {{"camera_info_accepted", 1},
+                                                                 {"dropped_bad_camera_info", 2}};
+  EXPECT_EQ(counts.cameraInfoValues(), camera_info);
 }
 
 TEST(FrameToBgr8, SwapsBigEndianMono16) {

@@ -41,10 +41,22 @@ struct RawFrame {
   std::uint32_t stamp_nsec = 0;
 };
 
-// Result of validating a RawFrame: either the parsed encoding, or a message naming the problem.
+// What a node did with one camera frame: accepted, or why it was dropped (FrameCounts).
+enum class FrameOutcome {
+  kAccepted,
+  kBadEncoding,   // not one of the accepted encodings
+  kBadSize,       // width, height, step and data size disagree (or are empty or absurd)
+  kBadStamp,      // header stamp nanoseconds >= 10^9
+  kSizeMismatch,  // a valid frame of a shape the intrinsics in force are not for
+  kError,         // an exception while handling it (a case the checks did not foresee)
+};
+
+// Result of validating a RawFrame: either the parsed encoding, or a message naming the problem
+// and its kind.
 struct FrameCheck {
   std::optional<Encoding> encoding;
   std::string error;  // empty when valid
+  FrameOutcome outcome = FrameOutcome::kAccepted;
   bool ok() const { return error.empty(); }
 };
 
@@ -54,10 +66,6 @@ struct FrameCheck {
 // throw), data size = height x step, and a header stamp whose nanoseconds are < 10^9. Either
 // byte order is accepted (frameToBgr8 swaps big-endian mono16). Never reads the pixel data.
 FrameCheck checkFrame(const RawFrame& frame);
-
-// The kind of problem a checkFrame error names, for counting drops: numbers become N, quoted or
-// bracketed details (an encoding name, the expected size) are cut off.
-std::string problemKind(const std::string& error);
 
 // A cv::Mat header over a checked frame's buffer (no copy; valid while the buffer lives).
 cv::Mat wrapFrame(const RawFrame& frame, Encoding encoding);

@@ -1,7 +1,5 @@
 #include "follow_bot_common/image_frame.h"
 
-#include <cctype>
-
 #include <opencv2/imgproc.hpp>
 
 namespace follow_bot {
@@ -45,17 +43,20 @@ FrameCheck checkFrame(const RawFrame& frame) {
   if (!result.encoding) {
     result.error = "unsupported encoding '" + frame.encoding +
                    "' (supported: bgr8, rgb8, bgra8, rgba8, mono8, mono16, 8UC1, 8UC3)";
+    result.outcome = FrameOutcome::kBadEncoding;
     return result;
   }
   if (frame.width == 0 || frame.height == 0) {
     result.error =
         "empty image (" + std::to_string(frame.width) + "x" + std::to_string(frame.height) + ")";
+    result.outcome = FrameOutcome::kBadSize;
     return result;
   }
   if (frame.width > kMaxDimension || frame.height > kMaxDimension) {
     result.error = "absurd dimensions " + std::to_string(frame.width) + "x" +
                    std::to_string(frame.height) + " (limit " + std::to_string(kMaxDimension) +
                    " per side)";
+    result.outcome = FrameOutcome::kBadSize;
     return result;
   }
   // 64-bit arithmetic: width, height and step are at most 2^32, so no product overflows.
@@ -65,6 +66,7 @@ FrameCheck checkFrame(const RawFrame& frame) {
     result.error = "step " + std::to_string(frame.step) +
                    " is less than width x bytes per pixel (" + std::to_string(min_step) + ") for " +
                    frame.encoding;
+    result.outcome = FrameOutcome::kBadSize;
     return result;
   }
   // cv::Mat asserts step % (bytes per channel value) == 0; padding must keep values aligned.
@@ -72,35 +74,26 @@ FrameCheck checkFrame(const RawFrame& frame) {
   if (frame.step % value_bytes != 0) {
     result.error = "step " + std::to_string(frame.step) + " is not a multiple of " +
                    std::to_string(value_bytes) + " bytes (one " + frame.encoding + " value)";
+    result.outcome = FrameOutcome::kBadSize;
     return result;
   }
   const std::uint64_t expected_size = static_cast<std::uint64_t>(frame.height) * frame.step;
   if (frame.data_size != expected_size) {
     result.error = "data size " + std::to_string(frame.data_size) + " != height x step (" +
                    std::to_string(expected_size) + ")";
+    result.outcome = FrameOutcome::kBadSize;
     return result;
   }
   if (frame.data == nullptr) {
     result.error = "no pixel buffer";
+    result.outcome = FrameOutcome::kBadSize;
     return result;
   }
   if (frame.stamp_nsec >= 1000000000u) {
     result.error = "header stamp nanoseconds " + std::to_string(frame.stamp_nsec) + " >= 10^9";
+    result.outcome = FrameOutcome::kBadStamp;
   }
   return result;
-}
-
-std::string problemKind(const std::string& error) {
-  std::string kind;
-  for (const char c : error.substr(0, error.find_first_of("'("))) {
-    if (!std::isdigit(static_cast<unsigned char>(c))) {
-      kind += c;
-    } else if (kind.empty() || kind.back() != 'N') {
-      kind += 'N';
-    }
-  }
-  while (!kind.empty() && (kind.back() == ' ' || kind.back() == ':')) kind.pop_back();
-  return kind.empty() ? "other" : kind;
 }
 
 cv::Mat wrapFrame(const RawFrame& frame, Encoding encoding) {

@@ -85,20 +85,25 @@ void CommandOutput::frameArrived() {
   wall_watchdog_.frameArrived(ros::SteadyTime::now().toSec());
   outage_stopped_ = false;
   stopped_by_watchdog_ = false;
-  ++frames_;
+  frames_seen_ = true;
 }
 
-void CommandOutput::frameDropped(const std::string& reason) {
+void CommandOutput::frameHandled(FrameOutcome outcome, const std::string& error) {
   std::lock_guard<std::mutex> lock(mutex_);
-  std::string kind = problemKind(reason);
-  if (dropped_.size() >= 16 && dropped_.count(kind) == 0) kind = "other";
-  ++dropped_[kind];
+  counts_.countFrame(outcome);
+  if (outcome == FrameOutcome::kAccepted) return;
   ++dropped_since_report_;
+  last_drop_ = error;
+}
+
+void CommandOutput::cameraInfoHandled(bool usable) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  counts_.countCameraInfo(usable);
 }
 
 void CommandOutput::reportFrameRate(diagnostic_updater::DiagnosticStatusWrapper& status) {
   CameraHealth health;
-  health.frames_seen = frames_ > 0;
+  health.frames_seen = frames_seen_;
   // A stopped /clock holds ROS time: then only the wall watchdog's outage tells.
   health.frames_flowing = !outage_stopped_ && !watchdog_.expired(ros::Time::now().toSec());
   health.stopped_by_watchdog = stopped_by_watchdog_;
@@ -128,11 +133,9 @@ void CommandOutput::reportStatus(diagnostic_updater::DiagnosticStatusWrapper& st
   status.add("state", state_);
   status.add("enabled", enabled_);
   status.add("cmd_vel", quiet_ ? "quiet (stopped)" : "driving");
-  status.add("frames accepted", frames_);
-  long dropped = 0;
-  for (const auto& [kind, count] : dropped_) dropped += count;
-  status.add("frames dropped", dropped);
-  for (const auto& [kind, count] : dropped_) status.add("dropped: " + kind, count);
+  for (const auto& [key, count] : counts_.frameValues()) status.add(key, count);
+  for (const auto& [key, count] : counts_.cameraInfoValues()) status.add(key, count);
+  status.add("last dropped frame", last_drop_);
   status.add("watchdog stops", watchdog_stops_);
   status.add("last watchdog stop clock", last_stop_clock_);
   status.add("watchdog timeout (s)", watchdog_.timeout());

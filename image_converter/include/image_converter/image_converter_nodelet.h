@@ -5,10 +5,12 @@
 #include <mutex>
 #include <string>
 
+#include <diagnostic_updater/diagnostic_updater.h>
 #include <image_transport/image_transport.h>
 #include <nodelet/nodelet.h>
 #include <sensor_msgs/Image.h>
 
+#include "follow_bot_common/frame_counts.h"
 #include "follow_bot_common/ros/checked_nodelet.h"
 #include "follow_bot_common/ros/node_help.h"
 #include "image_converter/overlay.h"
@@ -27,7 +29,8 @@ class ImageConverterNodelet : public follow_bot::CheckedNodelet {
   void updateSubscription();
   void subscribe();
   void onImage(const sensor_msgs::ImageConstPtr& msg);
-  void handleImage(const sensor_msgs::ImageConstPtr& msg);
+  follow_bot::FrameOutcome handleImage(const sensor_msgs::ImageConstPtr& msg);
+  void reportFrames(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   OverlayConfig overlay_;
   bool display_ = false;
@@ -36,6 +39,10 @@ class ImageConverterNodelet : public follow_bot::CheckedNodelet {
   image_transport::Subscriber input_;
   image_transport::Publisher output_;
   std::mutex connection_mutex_;
+  std::mutex counts_mutex_;  // frames and the diagnostics timer may run on different threads
+  follow_bot::FrameCounts counts_;
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
+  ros::SteadyTimer diagnostics_timer_;
 };
 
 }  // namespace image_converter

@@ -2,7 +2,8 @@
 //
 // Subscribes `camera/rgb/image_raw` (image_transport, queue 1), draws a red circle at the centre
 // and publishes `~output` (bgr8). Input is subscribed only while `~output` has subscribers or a
-// window is shown, so an idle converter costs nothing.
+// window is shown, so an idle converter costs nothing. /diagnostics "<node>: frames": every frame
+// received, counted once under its outcome (follow_bot::FrameCounts).
 #include <algorithm>
 #include <cstdlib>
 #include <mutex>
@@ -65,6 +66,16 @@ void ImageConverterNodelet::init() {
                                 "' is not an installed image_transport plugin");
   }
 
+  follow_bot::noteParamRead(pnh, "diagnostic_period");  // read by the Updater
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, pnh.getNamespace());
+  diagnostics_->setHardwareID("none");
+  diagnostics_->add("frames", this, &ImageConverterNodelet::reportFrames);
+  // update() publishes at most every ~diagnostic_period; checked often so the last counts go out.
+  diagnostics_timer_ =
+      nh.createSteadyTimer(ros::WallDuration(0.1), [this](const ros::SteadyTimerEvent&) {
+        follow_bot::guardedCallback("diagnostics", [this] { diagnostics_->update(); });
+      });
+
   std::lock_guard<std::mutex> lock(connection_mutex_);
   const auto on_connection_change = [this](const image_transport::SingleSubscriberPublisher&) {
     updateSubscription();
@@ -100,17 +111,20 @@ void ImageConverterNodelet::subscribe() {
 }
 
 void ImageConverterNodelet::onImage(const sensor_msgs::ImageConstPtr& msg) {
-  // Guarded: an exception drops the frame (throttled error), never the node.
-  follow_bot::guardedCallback("image", [&] { handleImage(msg); });
+  // Guarded: an exception drops the frame (throttled error, counted), never the node.
+  follow_bot::FrameOutcome outcome = follow_bot::FrameOutcome::kError;  // unless it returns
+  follow_bot::guardedCallback("image", [&] { outcome = handleImage(msg); });
+  std::lock_guard<std::mutex> lock(counts_mutex_);
+  counts_.countFrame(outcome);
 }
 
-void ImageConverterNodelet::handleImage(const sensor_msgs::ImageConstPtr& msg) {
+follow_bot::FrameOutcome ImageConverterNodelet::handleImage(const sensor_msgs::ImageConstPtr& msg) {
   const follow_bot::RawFrame raw = follow_bot::rawFrameOf(*msg);
   const follow_bot::FrameCheck check = follow_bot::checkFrame(raw);
   if (!check.ok()) {
     NODELET_ERROR_THROTTLE(1.0, "dropping frame on %s: %s", input_.getTopic().c_str(),
                            check.error.c_str());
-    return;
+    return check.outcome;
   }
   // The one copy (the overlay must not be drawn into a buffer other subscribers share).
   cv_bridge::CvImage annotated(msg->header, "bgr8", follow_bot::frameToBgr8(raw, *check.encoding));
@@ -121,6 +135,18 @@ void ImageConverterNodelet::handleImage(const sensor_msgs::ImageConstPtr& msg) {
     cv::imshow(kWindowName, annotated.image);
     cv::waitKey(1);
   }
+  return follow_bot::FrameOutcome::kAccepted;
+}
+
+void ImageConverterNodelet::reportFrames(diagnostic_updater::DiagnosticStatusWrapper& status) {
+  std::lock_guard<std::mutex> lock(counts_mutex_);
+  const long dropped = counts_.framesDropped();
+  if (dropped > 0) {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN, "%ld frames dropped", dropped);
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "running");
+  }
+  for (const auto& [key, count] : counts_.frameValues()) status.add(key, count);
 }
 
 follow_bot::NodeHelp imageConverterHelp() {
@@ -128,7 +154,9 @@ follow_bot::NodeHelp imageConverterHelp() {
           {{"in", follow_bot::topics::kImage, "sensor_msgs/Image",
             "image_transport, queue 1, subscribed only while ~output is; ~image_transport picks "
             "the transport"},
-           {"out", "~output", "sensor_msgs/Image", "annotated, bgr8, the input's header"}}};
+           {"out", "~output", "sensor_msgs/Image", "annotated, bgr8, the input's header"},
+           {"out", "/diagnostics", "diagnostic_msgs/DiagnosticArray",
+            "frames accepted and dropped by reason"}}};
 }
 
 }  // namespace image_converter

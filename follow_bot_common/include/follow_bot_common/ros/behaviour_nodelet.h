@@ -94,10 +94,10 @@ struct BehaviourOptions {
 //    do (a throttled warning); a frame that neither describes is dropped with a throttled error
 //    naming both sizes.
 //  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
-//  stamp checks;
-//    a bad frame is dropped with a throttled error), the camera's mounting for the frame (until
-//    it is known the behaviour holds still: an idle decision in state "waiting for camera
-//    mounting", no step()), then per accepted frame step(), the one
+//    stamp checks; a bad frame is dropped with a throttled error; every frame and camera_info
+//    counted under its outcome in the diagnostics, CommandOutput::frameHandled), the camera's
+//    mounting for the frame (until it is known the behaviour holds still: an idle decision in state
+//    "waiting for camera mounting", no step()), then per accepted frame step(), the one
 //    CommandOutput::send (cmd_vel, ~status, watchdog, ~enable, final stop), report() and a lazy
 //    ~debug_image.
 //  * a behaviour's own diagnostics (addDiagnostics), updated before each frame's step().
@@ -206,8 +206,11 @@ class BehaviourNodelet : public CheckedNodelet {
       debug_pub_ = image_transport::ImageTransport(pnh).advertise("debug_image", 1);
     }
     camera_info_sub_ = subscribe<sensor_msgs::CameraInfo>(
-        nh, topics::kCameraInfo,
-        [this](const sensor_msgs::CameraInfo& info) { onCameraInfo(info); });
+        nh, topics::kCameraInfo, [this](const sensor_msgs::CameraInfo& info) {
+          bool usable = false;  // unless onCameraInfo gets to take it
+          guardedCallback("camera_info", [&] { usable = onCameraInfo(info); });
+          output_->cameraInfoHandled(usable);
+        });
     camera_info_topic_ = camera_info_sub_.getTopic();
     // ~image_transport (e.g. compressed) read from this nodelet's private namespace, also when
     // it runs in a manager. The base name is resolved first so that a remapping of it also moves
@@ -233,13 +236,14 @@ class BehaviourNodelet : public CheckedNodelet {
     }
   }
 
-  void onCameraInfo(const sensor_msgs::CameraInfo& info) {
+  // Whether `info` was usable (taken as the intrinsics).
+  bool onCameraInfo(const sensor_msgs::CameraInfo& info) {
     CameraGeometry calibrated = camera_;
     std::string error = calibratedSizeError(info);
     if (error.empty()) error = updateIntrinsics(info, image_rectified_, calibrated);
     if (!error.empty()) {
       NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
-      return;
+      return false;
     }
     calibrated_ = calibrated;
     calibrated_size_ = cv::Size(static_cast<int>(info.width), static_cast<int>(info.height));
@@ -247,6 +251,7 @@ class BehaviourNodelet : public CheckedNodelet {
     // Taken now when it describes the frames arriving (or none arrived yet); else the next
     // frame decides (a change of resolution).
     fitIntrinsics(frame_size_.empty() ? calibrated_size_ : frame_size_);
+    return true;
   }
 
   // Both zero (not given) or both a frame's: a size no frame can have is a broken camera_info.
@@ -301,19 +306,26 @@ class BehaviourNodelet : public CheckedNodelet {
            " but " + described + ", not an image of that shape";
   }
 
+  // Every frame is counted once, under its outcome: one that throws is dropped as an error.
   void onImage(const sensor_msgs::ImageConstPtr& msg) {
-    guardedCallback("image", [&] { handleImage(msg); });
+    FrameOutcome outcome = FrameOutcome::kError;  // unless handleImage returns
+    std::string error = "an unexpected error (logged)";
+    guardedCallback("image", [&] { outcome = handleImage(msg, error); });
+    output_->frameHandled(outcome, error);
   }
 
-  void handleImage(const sensor_msgs::ImageConstPtr& msg) {
+  FrameOutcome handleImage(const sensor_msgs::ImageConstPtr& msg, std::string& error) {
     std::lock_guard<boost::recursive_mutex> lock(mutex_);
-    std::string error;
-    const cv_bridge::CvImageConstPtr image = bgrView(msg, error);
-    if (image) error = intrinsicsFor(image->image.size());
-    if (!image || !error.empty()) {
+    FrameCheck check;
+    const cv_bridge::CvImageConstPtr image = bgrView(msg, check);
+    error = check.error;
+    if (image) {
+      error = intrinsicsFor(image->image.size());
+      if (!error.empty()) check.outcome = FrameOutcome::kSizeMismatch;
+    }
+    if (!error.empty()) {
       NODELET_ERROR_THROTTLE(1.0, "dropping frame: %s", error.c_str());
-      output_->frameDropped(error);
-      return;
+      return check.outcome;
     }
     // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
     output_->frameArrived();
@@ -331,6 +343,7 @@ class BehaviourNodelet : public CheckedNodelet {
       drawDebug(debug.image);
       debug_pub_.publish(debug.toImageMsg());
     }
+    return FrameOutcome::kAccepted;
   }
 
   // The frame's mounting into camera_; false while it is unknown. A mounting the behaviour

@@ -37,17 +37,15 @@ inline RawFrame rawFrameOf(const sensor_msgs::Image& msg) {
 }
 
 // The frame as BGR8 after checkFrame (a view of the message, no copy, when it is bgr8; a fresh
-// image otherwise), or null with `error` set for a frame that fails the checks. No cv_bridge
+// image otherwise), or null for a frame that fails the checks (`check` says why). No cv_bridge
 // conversion: checkFrame already holds everything toBgr8 relies on.
 inline cv_bridge::CvImageConstPtr bgrView(const sensor_msgs::ImageConstPtr& msg,
-                                          std::string& error) {
+                                          FrameCheck& check) {
   const RawFrame raw = rawFrameOf(*msg);
-  const FrameCheck check = checkFrame(raw);
-  if (!check.ok()) {
-    error = check.error;
-    return nullptr;
-  }
-  if (*check.encoding == Encoding::kBgr8) {
+  check = checkFrame(raw);
+  if (!check.ok()) return nullptr;
+  // Only "bgr8" itself: cv_bridge refuses to share "8UC3" (the same layout) as bgr8.
+  if (msg->encoding == sensor_msgs::image_encodings::BGR8) {
     return cv_bridge::toCvShare(*msg, msg, sensor_msgs::image_encodings::BGR8);
   }
   return boost::make_shared<cv_bridge::CvImage>(msg->header, sensor_msgs::image_encodings::BGR8,

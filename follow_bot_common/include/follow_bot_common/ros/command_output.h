@@ -2,7 +2,6 @@
 // ~status, a frame watchdog and a final stop.
 #pragma once
 
-#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -12,6 +11,7 @@
 #include <std_msgs/Header.h>
 #include <std_srvs/SetBool.h>
 
+#include "follow_bot_common/frame_counts.h"
 #include "follow_bot_common/frame_rate_status.h"
 #include "follow_bot_common/frame_watchdog.h"
 #include "follow_bot_common/velocity_limiter.h"
@@ -46,10 +46,12 @@ namespace follow_bot {
 // Diagnostics: two diagnostic_updater statuses per node on /diagnostics, every
 // ~diagnostic_period. "<node>: frame rate" (frameRateStatus): the measured rate against
 // ~expected_frame_rate (Hz; 0, the default, unknown: any rate is OK; else +-20 %), the
-// watchdog's timeout in force. "<node>: behaviour": frames accepted, frames dropped by reason,
-// watchdog stops (and on which clock), the behaviour's state. Both are ERROR only while the
-// watchdog has stopped the robot; frames stopping while nothing was commanded (idle, disabled)
-// is a WARN saying so; dropped frames since the last report are a WARN.
+// watchdog's timeout in force. "<node>: behaviour": every frame and camera_info received,
+// counted once under its outcome (FrameCounts: frames_accepted, dropped_bad_size, ...,
+// camera_info_accepted, dropped_bad_camera_info), the last drop's reason, watchdog stops (and on
+// which clock), the behaviour's state. Both are ERROR only while the watchdog has stopped the
+// robot; frames stopping while nothing was commanded (idle, disabled) is a WARN saying so;
+// dropped frames since the last report are a WARN.
 //
 // Parameters (private): ~limit_linear (m/s, 0.7), ~limit_angular (rad/s, pi),
 // ~limit_linear_accel (m/s^2, 1.0), ~limit_angular_accel (rad/s^2, 6.0),
@@ -69,8 +71,10 @@ class CommandOutput {
 
   // Records that a usable frame arrived now.
   void frameArrived();
-  // Records a frame dropped by the checks; `reason` is the check's message.
-  void frameDropped(const std::string& reason);
+  // Counts one received frame under what became of it; `error` says why one was dropped.
+  void frameHandled(FrameOutcome outcome, const std::string& error = "");
+  // Counts one received camera_info, taken as the intrinsics (`usable`) or ignored.
+  void cameraInfoHandled(bool usable);
   // One processed frame's decision. Limits `desired` (acceleration against the previous send,
   // frameTime(frame) being the frame's time), publishes it per the active/idle rules above and
   // publishes the frame's ~status; `state` names the behaviour's state (status, diagnostics).
@@ -112,8 +116,9 @@ class CommandOutput {
 
   diagnostic_updater::Updater updater_;
   std::string state_ = "starting";
-  long frames_ = 0;
-  std::map<std::string, long> dropped_;  // by reason
+  bool frames_seen_ = false;  // a usable frame arrived
+  FrameCounts counts_;
+  std::string last_drop_;  // why the last dropped frame was dropped
   long dropped_since_report_ = 0;
   long watchdog_stops_ = 0;
   std::string last_stop_clock_ = "none";
