@@ -30,11 +30,14 @@ FAMILY_SIZES = {
     # under each of its effects alone (worlds/realistic/README.md).
     "follower_realistic": 19, "dumpster_realistic": 2, "beacons_follow_green_realistic": 1,
     "beacons_red_stop_realistic": 1, "parker_tag_realistic": 3, "parker_sign_realistic": 3,
+    # The follower's lap in a real room at full strength (the `harsh` profile), with a 150 ms
+    # late base alone, and through hard drifting shadows alone.
+    "follower_harsh": 3,
 }  # fmt: skip
 
 
 def family_file(family: str) -> Path:
-    folder = "realistic" if family.endswith("_realistic") else "scenarios"
+    folder = "realistic" if family.endswith(("_realistic", "_harsh")) else "scenarios"
     return WORLDS / folder / f"{family}.yaml"
 
 
@@ -59,6 +62,7 @@ QUICK = {
     "follower_realistic/realistic_fast", "dumpster_realistic/2m_30deg_realistic",
     "beacons_follow_green_realistic/realistic", "beacons_red_stop_realistic/realistic",
     "parker_tag_realistic/d1_off10_b0_realistic", "parker_sign_realistic/d1.5_off0_b18_realistic",
+    "follower_harsh/harsh", "follower_harsh/delay150", "follower_harsh/shadows_drifting",
 }  # fmt: skip
 # Every behaviour's runs through the turtlebot3 barrel lens, each with the start and
 # the bounds of its pinhole twin.

@@ -40,6 +40,76 @@ def test_parse_expands_the_profile_and_lays_fields_over_it():
         parse_realism({"glare": 1}, "realism")
 
 
+def test_a_range_is_drawn_per_run_from_its_seed():
+    options = parse_realism({"shadow_depth": [0.3, 0.55], "tape": [4, 6], "floor": "wood"}, "r")
+    assert options == {"shadow_depth": (0.3, 0.55), "tape": (4, 6), "floor": "wood"}
+    runs = [realism_from(options, seed=seed) for seed in range(200)]
+    depths = [r.shadow_depth for r in runs]
+    assert min(depths) >= 0.3 and max(depths) < 0.55 and np.ptp(depths) > 0.2
+    assert {r.tape for r in runs} == {4, 5, 6}
+    assert realism_from(options, seed=7) == realism_from(options, seed=7)
+    # An option's draw depends on its name and the seed only, not on the other options.
+    alone = realism_from(parse_realism({"shadow_depth": [0.3, 0.55]}, "r"), seed=7)
+    assert alone.shadow_depth == realism_from(options, seed=7).shadow_depth
+    with pytest.raises(ValidationError, match=r"realism\.tape: needs low <= high"):
+        parse_realism({"tape": [6, 4]}, "realism")
+    with pytest.raises(ValidationError, match=r"realism\.vignetting\[1\]: must be < 1"):
+        parse_realism({"vignetting": [0.2, 1.5]}, "realism")
+
+
+def test_the_harsh_profile_draws_every_range_within_it():
+    ranges = {k: v for k, v in PROFILES["harsh"].items() if isinstance(v, tuple)}
+    for seed in range(20):
+        harsh = realism_from(PROFILES["harsh"], seed=seed)
+        for key, (low, high) in ranges.items():
+            assert low <= getattr(harsh, key) <= high, key
+        assert harsh.floor == "wood" and harsh.jpeg_quality == 60 and harsh.yellow_box
+    assert 0.05 <= realism_from(PROFILES["harsh"], seed=3).actuation_delay <= 0.15
+
+
+def test_drifting_shadows_darken_and_tint_the_floor_and_move(worlds):
+    world = worlds["rgb"]  # plain grey floor (120), balls far ahead
+    realism = Realism(shadow_bands=6, shadow_depth=0.4, shadow_drift=0.5, shadow_tint=0.2)
+    renderer = Renderer(world, realism=realism, seed=3)
+    pose = (0.0, 0.0, math.pi)  # facing the open floor
+    first = renderer.render(pose, frame=0)
+    later = renderer.render(pose, frame=30)  # 1 s later: the bands moved 0.5 m
+    floor = first[300:]
+    expected = 120 * 0.4 * np.array([1.2, 1.0, 0.8])  # depth 40 %, blue up and red down 20 %
+    shadowed = np.all(np.abs(floor - expected) <= 1.0, axis=-1)  # the gain is kept to 1/255
+    lit = np.all(floor == 120, axis=-1)
+    assert shadowed.any() and lit.any()
+    assert np.count_nonzero(~(shadowed | lit)) < 0.05 * lit.size  # hard edges
+    assert (first[300:] != later[300:]).any()
+    assert (renderer.render(pose, frame=30) == later).all()  # and repeat
+
+
+def test_a_realism_lens_delay_lag_and_dropped_frames_reach_the_run():
+    from harness.scenario import parse_scenario
+    from harness.simulation import Simulation
+    from harness.world import load_world
+
+    realism = {"barrel": 0.28, "actuation_delay": 0.05, "motor_lag": 0.1, "frame_drop": 0.2}
+    scenario = parse_scenario(
+        {
+            "world": "course",
+            "driver": {"constant": [0.1, 0.0]},
+            "duration": 1.0,
+            "perturbations": {"realism": realism},
+        }
+    )
+    sim = Simulation(load_world(scenario.world_path), perturbations=scenario.perturbations)
+    assert sim.renderer.camera.camera_info_dict()["D"] == [-0.28, 0.07, 0.0, 0.0, 0.0]
+    assert len(sim.robot._queue) == 2  # 50 ms at 30 Hz: one whole step and a half
+    assert sim.robot.delay_fraction == pytest.approx(0.5)
+    assert sim.robot.lag == 0.1
+    dropped = 0
+    for _ in range(3000):
+        dropped += not sim.frames_flowing()
+        sim.step((0.1, 0.0), frame=True, replies=1, missed=False)
+    assert dropped == pytest.approx(600, abs=75)  # 20 %, binomial sigma 22
+
+
 def test_vignetting_darkens_the_corners_by_its_strength():
     sensor = Sensor(Realism(vignetting=0.3), 11, 9, seed=0, rate_hz=30.0)
     out = sensor.apply(uniform(200), frame=0, flow_px=(0.0, 0.0))

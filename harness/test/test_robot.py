@@ -78,8 +78,39 @@ def test_actuation_delay_is_a_fifo_of_steps():
     assert robot.pose[0] == pytest.approx(0.3)
 
 
+def test_a_fraction_of_a_step_delays_the_command_within_the_step():
+    # 1.25 steps of delay: the command given at t = 0 acts from t = 1.25 on, at 0.4 m/s.
+    robot = Robot(delay_steps=1, delay_fraction=0.25)
+    robot.step(0.4, 0.0, 1.0)
+    assert robot.pose[0] == 0.0
+    robot.step(0.4, 0.0, 1.0)
+    assert robot.pose[0] == pytest.approx(0.4 * 0.75)
+    robot.step(0.0, 0.0, 1.0)
+    assert robot.pose[0] == pytest.approx(0.4 * 1.75)
+    robot.step(0.0, 0.0, 1.0)  # the stop acts from t = 3.25
+    assert robot.pose[0] == pytest.approx(0.4 * 2.0)
+
+
+def test_motor_lag_is_a_first_order_response():
+    # Velocity v(t) = V (1 - exp(-t / tau)); distance V (t - tau (1 - exp(-t / tau))).
+    tau, v, dt = 0.15, 0.5, 1.0 / 30.0
+    robot = Robot(lag=tau)
+    for _ in range(9):  # t = 0.3 s = 2 tau
+        robot.step(v, 0.0, dt)
+    t = 9 * dt
+    assert robot.applied[0] == pytest.approx(v * (1.0 - math.exp(-t / tau)), rel=1e-9)
+    assert robot.pose[0] == pytest.approx(v * (t - tau * (1.0 - math.exp(-t / tau))), rel=1e-3)
+    turning = Robot(lag=tau)
+    turning.step(0.0, 1.0, tau)  # yaw after one tau: tau - tau (1 - 1/e) = tau / e
+    assert turning.pose[2] == pytest.approx(tau / math.e, rel=1e-3)
+
+
 def test_invalid_robot_arguments():
     with pytest.raises(ValueError, match="delay_steps"):
         Robot(delay_steps=-1)
     with pytest.raises(ValueError, match="dt"):
         Robot().step(0.1, 0.0, -0.1)
+    with pytest.raises(ValueError, match="delay_fraction"):
+        Robot(delay_fraction=1.0)
+    with pytest.raises(ValueError, match="lag"):
+        Robot(lag=-0.1)

@@ -6,11 +6,12 @@ import re
 import numpy as np
 import pytest
 
+from harness.geometry import polyline_length
 from harness.report import distributions, markdown, summarise, wilson_interval, worst, write_summary
 from harness.scenario import ScenarioError, load_scenarios
 from harness.sweep import Distribution, draw, member_name, member_seed, parse_sweep
 from harness.validation import ValidationError
-from harness.world import WORLDS_DIR
+from harness.world import WORLDS_DIR, load_world
 
 FAMILY = """
 base: {world: parking, driver: {constant: [0.2, 0.0]}, duration: 2.0, start: {from: goal_tag}}
@@ -85,6 +86,41 @@ def test_the_shipped_sweep_draws_its_documented_ranges():
         family_rest = {c for c in family.criteria if c.metric not in spec}
         assert family_rest <= set(s.criteria)
         assert (s.duration, s.stop_when) == (40.0, "still")
+
+
+def test_the_harsh_follower_sweep_bounds_each_speed_by_twice_its_clean_lap():
+    runs = load_scenarios(WORLDS_DIR / "sweeps" / "follower_harsh_sweep.yaml")
+    assert len(runs) >= 100
+    course = load_world(WORLDS_DIR / "course.yaml")
+    loop = polyline_length(course.centreline(), True)
+    speeds = set()
+    for s in runs:
+        speed = float(s.behaviour.args["max_linear"])
+        speeds.add(speed)
+        bounds = {c.metric: (c.minimum, c.maximum, c.equals) for c in s.criteria}
+        assert bounds["lap.lap_time"][1] == pytest.approx(2.0 * loop / speed, rel=0.002)
+        assert s.duration == bounds["lap.lap_time"][1]
+        assert bounds["cross_track.rms"][1] == 0.02 and bounds["cross_track.max"][1] == 0.08
+        assert bounds["lap.complete"][2] is True
+        # The start lies on the line, heading along it.
+        x, y, yaw = s.start
+        assert np.min(np.hypot(*(course.centreline() - [x, y]).T)) < 0.005
+        assert s.parameters["realism.actuation_delay"] == pytest.approx(0.1, abs=0.05)
+    assert speeds == {0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5}
+    # Every member its own room: the profile's draws differ from member to member.
+    assert len({s.parameters["realism.shadow_depth"] for s in runs}) == len(runs)
+
+
+# (parker_sign_harsh_sweep too, but its starts by intent load the sign world per member: ~1 min)
+@pytest.mark.parametrize("name", ["beacons_follow_green", "beacons_red_stop", "dumpster"])
+def test_the_harsh_behaviour_sweeps_extend_their_families(name):
+    runs = load_scenarios(WORLDS_DIR / "sweeps" / f"{name}_harsh_sweep.yaml")
+    family = load_scenarios(WORLDS_DIR / "scenarios" / f"{name}.yaml")[0]
+    assert len(runs) == 100
+    for s in runs:
+        assert dict(s.perturbations.realism)["actuation_delay"] == (0.05, 0.15)
+        assert (s.world_path, s.behaviour) == (family.world_path, family.behaviour)
+        assert {c.metric for c in family.criteria} <= {c.metric for c in s.criteria}
 
 
 def test_distribution_shapes():

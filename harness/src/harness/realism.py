@@ -7,13 +7,18 @@ from RNGs keyed by the run's seed, so a run repeats exactly:
   along the floor's edge, and distractors added to the world (a white lane line beside line 0,
   yellow tape pieces and a yellow box off the course, coloured objects, posters beside markers);
 - sensor (per frame, `Sensor.apply`): motion blur over the exposure, vignetting, exposure drift and
-  per-channel white balance, brightness-dependent noise, JPEG artefacts.
+  per-channel white balance, brightness-dependent noise, JPEG artefacts;
+- drifting shadow bands (`DriftingShadows`, drawn over the floor of each frame), a barrel lens,
+  dropped frames, and the base's actuation delay and first-order motor lag (harness.simulation).
+A numeric option may be a range [low, high]: each run draws its value from the run's seed
+(`realism_from`), so `profile: harsh` is a different room, camera and base in every run.
 """
 
 from __future__ import annotations
 
 import functools
 import math
+import zlib
 from dataclasses import dataclass, fields, replace
 from statistics import NormalDist
 from typing import Any
@@ -69,6 +74,12 @@ class Realism:
     yellow_box: bool = False  # a yellow box off the course
     clutter: int = 0  # extra coloured boxes and balls away from the robot's way
     posters: int = 0  # textured posters beside each marker (tag or sign)
+    shadow_drift: float = 0.0  # m/s the shadow bands move across the floor; 0: baked, still
+    shadow_tint: float = 0.0  # skylight in the shadows: blue gain 1 + tint, red 1 - tint
+    barrel: float = 0.0  # barrel lens: plumb_bob k1 = -barrel, k2 = barrel / 4; 0: pinhole
+    frame_drop: float = 0.0  # probability that a frame never reaches the behaviour
+    actuation_delay: float = 0.0  # s from a command to the base acting on it
+    motor_lag: float = 0.0  # s, time constant of the base's first-order velocity response
 
     @property
     def sensor_active(self) -> bool:
@@ -100,6 +111,36 @@ PROFILES: dict[str, dict[str, Any]] = {
         "clutter": 4,
         "posters": 2,
     },
+    # A real room, camera and base, everything at once and at full strength; the ranges are
+    # drawn per run from its seed. An oak floor whose hue sits near the line's, hard shadows
+    # at 30-55 % drifting across the line with a bluish (skylight) tint, a barrel lens, exposure
+    # and white-balance drift with vignetting, motion blur, JPEG 60, noise, dropped frames,
+    # and a base that acts 50-150 ms late through a 0.1-0.2 s first-order motor lag.
+    "harsh": {
+        "floor": "wood",
+        "walls": 1.2,
+        "shadow_bands": (3, 6),
+        "shadow_depth": (0.30, 0.55),
+        "shadow_drift": (0.02, 0.10),
+        "shadow_tint": (0.10, 0.25),
+        "exposure_drift": (0.10, 0.25),
+        "exposure_period": (4.0, 12.0),
+        "white_balance": (0.05, 0.15),
+        "vignetting": (0.25, 0.45),
+        "exposure_time": (0.01, 0.03),
+        "read_noise": (1.5, 4.0),
+        "shot_noise": (0.04, 0.12),
+        "jpeg_quality": 60,
+        "lane_line": (0.15, 0.35),
+        "tape": (4, 10),
+        "yellow_box": True,
+        "clutter": (2, 6),
+        "posters": 2,
+        "barrel": (0.20, 0.35),
+        "frame_drop": (0.03, 0.15),
+        "actuation_delay": (0.05, 0.15),
+        "motor_lag": (0.10, 0.20),
+    },
 }
 
 _OPTION_PARSERS = {
@@ -120,8 +161,30 @@ _OPTION_PARSERS = {
     "yellow_box": boolean,
     "clutter": integer(ge=0),
     "posters": integer(ge=0),
+    "shadow_drift": number(ge=0.0),
+    "shadow_tint": number(ge=0.0, lt=1.0),
+    "barrel": number(ge=0.0, le=1.0),
+    "frame_drop": number(ge=0.0, lt=1.0),
+    "actuation_delay": number(ge=0.0, le=1.0),
+    "motor_lag": number(ge=0.0, le=2.0),
 }
 assert set(_OPTION_PARSERS) == {f.name for f in fields(Realism)}
+# Options a range [low, high] may give (drawn per run); integers are drawn inclusively.
+_NUMBERS = {f.name for f in fields(Realism) if f.type in ("float", "int")}
+_INTEGERS = {f.name for f in fields(Realism) if f.type == "int"}
+
+
+def _option(key: str, value: Any, where: str) -> Any:
+    """One option's value, or for a numeric option given as [low, high] the range (a tuple)."""
+    parse = _OPTION_PARSERS[key]
+    if not (isinstance(value, list) and key in _NUMBERS):
+        return parse(value, where)
+    if len(value) != 2:
+        raise ValidationError(f"{where}: a value or a range [low, high], got {value!r}")
+    low, high = (parse(v, f"{where}[{i}]") for i, v in enumerate(value))
+    if high < low:
+        raise ValidationError(f"{where}: needs low <= high, got {value!r}")
+    return (low, high)
 
 
 def parse_realism(value: Any, where: str) -> dict[str, Any]:
@@ -135,18 +198,41 @@ def parse_realism(value: Any, where: str) -> dict[str, Any]:
                 f"{f.where('profile')}: unknown profile {profile!r} (known: {', '.join(PROFILES)})"
             )
         out.update(PROFILES[profile])
-    for key, parse in _OPTION_PARSERS.items():
+    for key in _OPTION_PARSERS:
         if f.has(key):
-            out[key] = f.get(key, parse)
+            out[key] = f.get(key, lambda v, w, key=key: _option(key, v, w))
     if out.get("floor", "plain") not in FLOORS:
         raise ValidationError(f"{f.where('floor')}: one of {', '.join(FLOORS)}")
-    if out.get("jpeg_quality", 0) > 100:
+    if max(np.atleast_1d(out.get("jpeg_quality", 0))) > 100:
         raise ValidationError(f"{f.where('jpeg_quality')}: 1..100, or 0 for no JPEG")
     return out
 
 
-def realism_from(options: dict[str, Any], base: Realism | None = None) -> Realism:
-    return replace(base or Realism(), **options)
+def drawn(options: dict[str, Any], seed: int) -> dict[str, Any]:
+    """`options` with each range [low, high] replaced by the run's value: uniform (integers:
+    each whole number in it equally likely) from an RNG keyed by the seed and the option's name,
+    so one option's draw does not change when others are added or dropped."""
+    out = dict(options)
+    for key, value in options.items():
+        if isinstance(value, tuple):
+            rng = rng_for(seed, 11, zlib.crc32(key.encode()))
+            low, high = value
+            out[key] = (
+                int(rng.integers(low, high + 1))
+                if key in _INTEGERS
+                else float(rng.uniform(low, high))
+            )
+    return out
+
+
+def realism_from(options: dict[str, Any], base: Realism | None = None, seed: int = 0) -> Realism:
+    """The Realism of `options` laid over `base`, ranges drawn from `seed` (the run's)."""
+    return replace(base or Realism(), **drawn(options, seed))
+
+
+def barrel_distortion(barrel: float) -> tuple[float, float, float, float, float]:
+    """The plumb_bob coefficients of a barrel lens of strength `barrel` (0.28: turtlebot3's)."""
+    return (-barrel, barrel / 4.0, 0.0, 0.0, 0.0)
 
 
 def rng_for(seed: int, *stream: int) -> np.random.Generator:
@@ -246,6 +332,63 @@ def shadow_band_mask(shape: tuple[int, int], mpp: float, count: int, seed: int) 
         cv2.fillConvexPoly(mask, np.rint(quad * 16).astype(np.int32), 255, cv2.LINE_AA, 4)
     soft = max(SHADOW_SOFT_M / mpp, 0.5)
     return cv2.GaussianBlur(mask.astype(np.float32) / 255.0, (0, 0), soft)
+
+
+def shadow_gains(depth: float, tint: float) -> np.ndarray:
+    """B, G, R brightness inside a shadow: `depth` of lit, bluer by `tint` (a shadow is lit by
+    the blue sky only, not by the sun)."""
+    return depth * np.array([1.0 + tint, 1.0, 1.0 - tint], np.float32)
+
+
+class DriftingShadows:
+    """Hard shadow bands (as `shadow_band_mask`'s) that move across the floor along their
+    normals at `shadow_drift` m/s, each its own way, leaving one side of the floor and coming
+    back at the other. The renderer draws them over the floor of each frame, before any
+    object, with anti-aliased (not 1 cm soft) edges."""
+
+    def __init__(self, realism: Realism, origin, size, seed: int):
+        rng = rng_for(seed, 2)
+        corners = np.array(origin) + np.array([[0, 0], [size[0], 0], [0, size[1]], size])
+        self.normals, self.offsets, self.half, self.speed, self.low, self.span = (
+            [] for _ in range(6)
+        )
+        for _ in range(realism.shadow_bands):
+            centre = rng.uniform(origin, np.array(origin) + np.array(size))
+            angle = rng.uniform(0.0, math.pi)
+            normal = np.array([-math.sin(angle), math.cos(angle)])
+            half = rng.uniform(0.1, 0.3)
+            reach = corners @ normal
+            self.normals.append(normal)
+            self.offsets.append(float(centre @ normal))
+            self.half.append(half)
+            self.speed.append(realism.shadow_drift * rng.choice([-1.0, 1.0]))
+            self.low.append(float(reach.min()) - half)
+            self.span.append(float(reach.max() - reach.min()) + 2.0 * half)
+        self.gains = shadow_gains(realism.shadow_depth, realism.shadow_tint)
+        # Half the length of a band's quad, from the point of its centre line nearest the world
+        # origin: beyond every corner of the floor.
+        self.reach = float(np.max(np.hypot(*corners.T))) + 1.0
+
+    def band_offsets(self, t: float) -> list[float]:
+        """Each band's centre (its distance along its normal from the world origin) at time t."""
+        return [
+            low + (offset + speed * t - low) % span
+            for offset, speed, low, span in zip(
+                self.offsets, self.speed, self.low, self.span, strict=True
+            )
+        ]
+
+    def quads(self, t: float) -> list[np.ndarray]:
+        """Each band at time t as a floor quad (4 x 2, world metres), long enough to cross the
+        whole floor."""
+        out = []
+        for normal, centre, half, span in zip(
+            self.normals, self.band_offsets(t), self.half, self.span, strict=True
+        ):
+            along = np.array([-normal[1], normal[0]]) * max(span, self.reach)
+            near, far = centre * normal - half * normal, centre * normal + half * normal
+            out.append(np.array([near - along, near + along, far + along, far - along]))
+        return out
 
 
 def wall_texture(length_m: float, height_m: float, colour, seed: int) -> np.ndarray:

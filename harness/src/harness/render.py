@@ -19,11 +19,13 @@ from harness.apriltag_image import family_geometry, tag_image
 from harness.camera import PINHOLE, Camera
 from harness.geometry import clip_polygon_near, rot_z
 from harness.realism import (
+    DriftingShadows,
     Realism,
     Sensor,
     floor_texture,
     gaussian_table,
     shadow_band_mask,
+    shadow_gains,
     wall_texture,
     with_distractors,
 )
@@ -174,10 +176,14 @@ def ground_texture(
             sl = np.s_[ys.min() : ys.max() + 1, xs.min() : xs.max() + 1]
             factor = 1.0 - (1.0 - shade) * mask[sl].astype(np.float32) / 255.0
             tex[sl] = np.rint(tex[sl] * factor[..., None])
-    if realism is not None and realism.shadow_bands:
+    if realism is not None and realism.shadow_bands and not realism.shadow_drift:
         bands = shadow_band_mask((rows, cols), m, realism.shadow_bands, seed)
-        factor = 1.0 - (1.0 - realism.shadow_depth) * bands
-        tex[:] = np.rint(tex * factor[..., None])
+        if realism.shadow_tint:
+            gains = shadow_gains(realism.shadow_depth, realism.shadow_tint)
+            tex[:] = np.rint(tex * (1.0 - (1.0 - gains) * bands[..., None]))
+        else:
+            factor = 1.0 - (1.0 - realism.shadow_depth) * bands
+            tex[:] = np.rint(tex * factor[..., None])
     return tex, tex_to_world
 
 
@@ -528,6 +534,7 @@ class Renderer:
         self.noise_sigma = world.noise.sigma if noise_sigma is None else noise_sigma
         self.seed = world.noise.seed if seed is None else seed
         self.realism = world.realism if realism is None else realism
+        self.rate_hz = rate_hz
         if self.realism != Realism():
             starts = (tuple(world.robot.start[:2]), *starts)
             world = with_distractors(world, self.realism, self.seed, list(starts))
@@ -543,6 +550,15 @@ class Renderer:
         self._light = np.array(lighting.direction)
         self._items = [self._item(obj, lighting.ambient) for obj in world.objects]
         self._walls = self._wall_items(world) if self.realism.walls else []
+        drifting = self.realism.shadow_bands and self.realism.shadow_drift
+        g = world.ground
+        self._drifting = (
+            DriftingShadows(self.realism, g.origin, g.size, self.seed) if drifting else None
+        )
+        if self._drifting is not None:  # shadow coverage 0..255 -> 255 * that pixel's gain
+            cover = np.arange(256, dtype=np.float32)[:, None] / 255.0
+            table = 255.0 * (1.0 - (1.0 - self._drifting.gains) * cover)
+            self._shadow_lut = np.rint(table).astype(np.uint8).reshape(1, 256, 3)
         self._sensor = (
             Sensor(self.realism, self.camera.width, self.camera.height, self.seed, rate_hz)
             if self.realism.sensor_active
@@ -602,8 +618,10 @@ class Renderer:
                 borderMode=cv2.BORDER_CONSTANT,
                 borderValue=self._floor,
             )
+        view = _View(cam, pose, self._light)
+        if self._drifting is not None and first < cam.height:
+            self._draw_drifting_shadows(image, view, frame / self.rate_hz)
         if self._items or self._walls:
-            view = _View(cam, pose, self._light)
             for wall in self._walls:  # inside the room: behind every object
                 wall.draw(image, view)
             dist = [float(np.linalg.norm(it.anchor - view.position)) for it in self._items]
@@ -621,6 +639,19 @@ class Renderer:
         if self._sensor is not None:
             image = self._sensor.apply(image, frame, self.motion_flow(pose, motion))
         return image
+
+    def _draw_drifting_shadows(self, image: np.ndarray, view: _View, t: float) -> None:
+        """Darken (and tint) the floor where the drifting shadow bands lie at time t."""
+        mask = np.zeros(image.shape[:2], np.uint8)
+        for quad in self._drifting.quads(t):
+            corners = view.to_camera(np.column_stack([quad, np.zeros(len(quad))]))
+            _fill_polygon(mask, view.camera, corners, 255)
+        x, y, w, h = cv2.boundingRect(mask)
+        if not w:
+            return
+        roi = np.s_[y : y + h, x : x + w]
+        factor = cv2.LUT(cv2.merge([mask[roi]] * 3), self._shadow_lut)  # 255 * gain, per channel
+        image[roi] = cv2.multiply(image[roi], factor, scale=1.0 / 255.0)
 
     def _lens_pixels(self, pinhole_px: np.ndarray) -> np.ndarray:
         """Pinhole pixels where the camera's lens puts them."""

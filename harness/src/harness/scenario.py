@@ -24,9 +24,9 @@ import yaml
 
 from harness import scoring
 from harness.camera import Camera
-from harness.realism import parse_realism
+from harness.realism import drawn, parse_realism
 from harness.robot_preset import GENERIC, frame_rate, preset, robot_world
-from harness.simulation import Perturbations
+from harness.simulation import Perturbations, run_lens, run_seed
 from harness.sweep import draw, member_name, parse_sweep
 from harness.validation import (
     Fields,
@@ -577,10 +577,24 @@ def load_scenarios(path: Path | str) -> list[Scenario]:
         runs = expand(data, p.stem, p.parent)
     except ValidationError as error:
         raise ScenarioError(f"{p}: {error}") from None
+    scenarios = [parse_scenario(run, p.parent, p.resolve()) for run, _ in runs]
     return [
-        replace(parse_scenario(run, p.parent, p.resolve()), parameters=parameters)
-        for run, parameters in runs
+        replace(s, parameters={**parameters, **realism_draws(s)})
+        for s, (_, parameters) in zip(scenarios, runs, strict=True)
     ]
+
+
+def realism_draws(scenario: Scenario) -> dict[str, Any]:
+    """The values a run drew for the realism options its file gives as ranges, by field path
+    (`realism.shadow_depth`), reported beside a sweep's own draws."""
+    options = dict(scenario.perturbations.realism)
+    if not any(isinstance(v, tuple) for v in options.values()):
+        return {}
+    seed = scenario.seed  # a sweep member's; else the world's noise seed, as the run's
+    if seed is None:
+        seed = run_seed(load_world(scenario.world_path), scenario.perturbations)
+    values = drawn(options, seed)
+    return {f"realism.{k}": values[k] for k, v in options.items() if isinstance(v, tuple)}
 
 
 def load_scenario(path: Path | str) -> Scenario:
@@ -660,9 +674,8 @@ def metrics(scenario: Scenario, world: World, run: dict[str, np.ndarray]) -> dic
         err["still_since"] = scoring.still_since(t, run["v"], run["w"])
         out["parking"] = err
     if scenario.watch and len(t):
-        out["watch"] = stop_on_sight(
-            world, find_object(world, scenario.watch, "watch"), run, scenario.perturbations.lens
-        )
+        lens = run_lens(world, scenario.perturbations)
+        out["watch"] = stop_on_sight(world, find_object(world, scenario.watch, "watch"), run, lens)
     dropouts = []
     for start, end in scenario.perturbations.dropouts:
         stop = _stop_in_window(run, start, end)

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from harness.geometry import polyline_length
-from harness.realism import realism_from
+from harness.realism import Realism, barrel_distortion, realism_from, rng_for
 from harness.render import Renderer
 from harness.robot import Robot
 from harness.scoring import progress
@@ -63,6 +63,27 @@ def with_line_gaps(world: World, gaps: tuple[tuple[float, float], ...]) -> World
     lines = tuple(replace(line, points=points[piece], closed=False) for piece in pieces)
     ground = replace(world.ground, lines=lines + world.ground.lines[1:])
     return replace(world, ground=ground)
+
+
+def run_seed(world: World, perturbations: Perturbations) -> int:
+    """The run's seed: the scenario's, else the world's noise seed."""
+    p = perturbations
+    return world.noise.seed if p.noise_seed is None else p.noise_seed
+
+
+def run_realism(world: World, perturbations: Perturbations) -> Realism:
+    """The run's realism: the scenario's options over the world's, ranges drawn from its seed."""
+    options = dict(perturbations.realism)
+    return realism_from(options, world.realism, run_seed(world, perturbations))
+
+
+def run_lens(world: World, perturbations: Perturbations):
+    """The run's plumb_bob lens when it replaces the world's: the scenario's `lens`, else the
+    realism's barrel lens; None keeps the world camera's."""
+    if perturbations.lens is not None:
+        return perturbations.lens
+    barrel = run_realism(world, perturbations).barrel
+    return barrel_distortion(barrel) if barrel else None
 
 
 @dataclass
@@ -135,7 +156,10 @@ class Simulation:
         self.perturbations = perturbations or Perturbations()
         p = self.perturbations
         painted = with_line_gaps(world, p.line_gaps)
-        camera = world.camera if p.lens is None else replace(world.camera, distortion=p.lens)
+        self.seed = run_seed(world, p)
+        realism = run_realism(world, p)
+        lens = run_lens(world, p)
+        camera = world.camera if lens is None else replace(world.camera, distortion=lens)
         error = dict(p.mounting_error)
         camera = replace(
             camera,
@@ -148,17 +172,23 @@ class Simulation:
             gain=p.gain,
             noise_sigma=p.noise_sigma,
             seed=p.noise_seed,
-            realism=realism_from(dict(p.realism), world.realism),
+            realism=realism,
             rate_hz=rate_hz,
             starts=(tuple(start[:2]),) if start else (),
         )
         delay = world.robot.delay_steps if p.delay_steps is None else p.delay_steps
+        # The realism's delay in seconds adds whole steps and a fraction of one.
+        delay_in_steps = delay + realism.actuation_delay / self.dt
+        whole = math.floor(delay_in_steps + 1e-9)
         self.robot = Robot(
             start or world.robot.start,
             max_v=world.robot.max_v,
             max_w=world.robot.max_w,
-            delay_steps=delay,
+            delay_steps=whole,
+            delay_fraction=max(0.0, delay_in_steps - whole) if realism.actuation_delay else 0.0,
+            lag=realism.motor_lag,
         )
+        self.frame_drop = realism.frame_drop
         names = {obj.name for obj in world.objects}
         for name, _, _ in p.hidden:
             if name not in names:
@@ -175,9 +205,14 @@ class Simulation:
         return self.robot.pose
 
     def frames_flowing(self) -> bool:
-        """False while a camera dropout covers the current time."""
+        """False while a camera dropout covers the current time, or when the realism drops
+        this step's frame (drawn from the run's seed and the step)."""
         t = self.time
-        return not any(start <= t < end for start, end in self.perturbations.dropouts)
+        if any(start <= t < end for start, end in self.perturbations.dropouts):
+            return False
+        return not (
+            self.frame_drop and rng_for(self.seed, 10, self.step_index).uniform() < self.frame_drop
+        )
 
     def hidden_now(self) -> set[str]:
         """Names of the objects a `hide` perturbation leaves out of the current frame."""

@@ -461,20 +461,22 @@ def _parse_world_document(data: Any, base_dir: Path, source: Path | None) -> Wor
     for i, name in enumerate(names):
         if name in names[:i]:
             raise WorldError(f"objects[{i}].name: duplicate object name {name!r}")
+    noise = top.section("noise", _parse_noise)
     return World(
         name=top.get("name", string),
         background=top.get("background", bgr_colour, (200, 200, 200)),
         ground=top.get("ground", lambda v, w: _parse_ground(v, w, base)),
         objects=objects,
         lighting=top.section("lighting", _parse_lighting),
-        noise=top.section("noise", _parse_noise),
+        noise=noise,
         robot=top.section("robot", _parse_robot),
         camera=top.section("camera", _parse_camera),
         camera_transport=top.section(
             "camera", lambda v, w: parse_camera_transport(_camera_fields(v, transport=True), w)
         ),
         source=source,
-        realism=realism_from(top.section("realism", parse_realism)),
+        # A world's ranges are drawn from its noise seed (a scenario's from the run's seed).
+        realism=realism_from(top.section("realism", parse_realism), seed=noise.seed),
     )
 
 
