@@ -1,4 +1,4 @@
-"""Quiet when idle (issue 18, docs/behaviour_contract.md), on real nodes: a behaviour publishes
+"""Quiet when idle (docs/behaviour_contract.md), on real nodes: a behaviour publishes
 cmd_vel only while it steers, one zero when it stops, ~enable turns it off and on, and its
 ~status answers every frame.
 

@@ -252,8 +252,8 @@ COMPRESSED_CASES = {"malformed_compressed"}
 
 
 def crash_cases() -> dict[str, list]:
-    """The four killers found by the first fuzzing run (issue 12), each a short message list,
-    malformed payloads of the compressed transport and broken camera_info (issue 14)."""
+    """The four killers the first fuzzing run found, each a short message list,
+    malformed payloads of the compressed transport and broken camera_info."""
     line = probe_frame("line")
     return {
         # Passes step >= width*2 and data == height*step, but a 16-bit cv::Mat needs an even step.
