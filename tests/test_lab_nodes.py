@@ -52,7 +52,7 @@ def contract_client() -> dict:
     from harness.fuzz import bgr_msg
 
     rospy.init_node("lab_client", disable_signals=True)
-    steps = Lockstep("follow_green_stop_red")
+    steps = Lockstep("follow_green_stop_red", reads_camera_info=False)  # colour only
     for _ in range(15):
         steps.frame(bgr_msg(patch_frame(RECTS["green"][0])))
     for _ in range(30):
