@@ -53,11 +53,6 @@ struct SignDetectorConfig {
   // and iterations than a searched one (ECC is most of a frame's cost).
   int track_refine_passes = 1;      // render-and-align passes on a tracked frame, all required
   int track_refine_iterations = 5;  // ECC iteration limit per pass on a tracked frame
-  // ... except a sign seen narrower than this (pixels; 111 px at 2 m for the harness camera):
-  // there its tilt is at the alignment's noise floor, a short alignment kept most of the last
-  // frame's tilt error and the error wandered from frame to frame with the CPU's SIMD kernels
-  // (3.5 deg at 3 m without AVX2, 0.5 with). Such a tracked frame is aligned to convergence.
-  double track_converge_below_px = 120.0;
 };
 
 // Empty when the configuration is usable (the image itself is checked by the constructor),

@@ -37,10 +37,6 @@ constexpr int kMinTextureCols = 16;
 // ECC stops when its correlation coefficient changes by less than this between iterations.
 constexpr double kAlignEpsilon = 1e-6;
 
-// Render-and-align passes (of refine_iterations) that bring a tracked frame of a narrow sign to
-// convergence: with four, the sweep's errors agree within 0.5 deg between AVX2 and SSE4 kernels.
-constexpr int kConvergedPasses = 4;
-
 // A sign last seen larger than this (its smaller side, pixels) is searched at half resolution.
 constexpr int kHalfResolutionSignPx = 150;
 
@@ -108,7 +104,6 @@ std::string validate(const SignDetectorConfig& config) {
            requirePositive("max_track_motion_px", config.max_track_motion_px),
            requireAtLeast("track_refine_passes", config.track_refine_passes, 1),
            requireAtLeast("track_refine_iterations", config.track_refine_iterations, 1),
-           requireAtLeast("track_converge_below_px", config.track_converge_below_px, 0.0),
        }) {
     if (!error.empty()) return error;
   }
@@ -439,18 +434,8 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
   std::vector<cv::Point3f> pose_object = inlier_object;
   std::vector<cv::Point2f> pose_image = inlier_image;
   // Only the alignment to the reference vouches for a tracked homography.
-  int wanted = tracked ? config_.track_refine_passes : config_.refine_passes;
-  int iterations = tracked ? config_.track_refine_iterations : config_.refine_iterations;
-  if (tracked) {
-    std::vector<cv::Point2d> outline;
-    cv::perspectiveTransform(outlinePlane(), outline, plane_to_image);
-    const double width_px =
-        (cv::norm(outline[1] - outline[0]) + cv::norm(outline[2] - outline[3])) / 2;
-    if (width_px < config_.track_converge_below_px) {
-      wanted = std::max(wanted, kConvergedPasses);
-      iterations = std::max(iterations, config_.refine_iterations);
-    }
-  }
+  const int wanted = tracked ? config_.track_refine_passes : config_.refine_passes;
+  const int iterations = tracked ? config_.track_refine_iterations : config_.refine_iterations;
   int passes = 0;
   while (passes < wanted && refineHomography(gray, camera, iterations, plane_to_image)) {
     ++passes;
