@@ -13,6 +13,10 @@ import pytest
 
 from harness.run_scenario import free_port, stop, wait_for_port
 
+# A closed-loop check of a minute (the lecture launch, two robots), not a bad-input or fault
+# test: `make test-full` plays it, so `make test` keeps within its 12 minutes.
+pytestmark = pytest.mark.full
+
 ZERO = [0.0] * 6  # linear x y z, angular x y z
 
 

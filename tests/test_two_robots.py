@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 import rosgraph
 import yaml
 
@@ -22,6 +23,10 @@ from harness.node_under_test import private_master
 from harness.run_scenario import stop
 from harness.scenario import check, load_scenarios, metrics
 from harness.world import load_world
+
+# A closed-loop check of a minute (the lecture launch, two robots), not a bad-input or fault
+# test: `make test-full` plays it, so `make test` keeps within its 12 minutes.
+pytestmark = pytest.mark.full
 
 FOLLOWER = Path(__file__).resolve().parents[1] / "worlds" / "scenarios" / "follower.yaml"
 ROBOTS = ("robot1", "robot2")
