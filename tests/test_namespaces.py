@@ -18,6 +18,10 @@ import rosgraph
 from harness.node_under_test import private_master
 from harness.run_scenario import stop
 
+# Topic naming over every node (about 35 s), not a bad-input or fault test: `make test-full`
+# plays it, so `make test` keeps within its 12 minutes.
+pytestmark = pytest.mark.full
+
 # Global by convention: diagnostic_updater's aggregate topic, rosout, the sim clock and tf2's
 # (one tree per robot only where they are remapped, as test_two_robots does).
 GLOBAL_TOPICS = {"/diagnostics", "/rosout", "/clock", "/tf", "/tf_static"}
