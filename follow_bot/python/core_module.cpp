@@ -565,11 +565,13 @@ void bindSteering(py::module_& m) {
   py::class_<LineObservation> observation(
       m, "LineObservation",
       "One frame as a steering law sees it: the measurement, its stamp (s), the twist applied "
-      "since the previous frame and the command sent after it.");
+      "since the previous frame, the command sent after it and the base's measured delay (s, "
+      "None: the configured command_latency).");
   observation.def_readwrite("measurement", &LineObservation::measurement)
       .def_readwrite("stamp", &LineObservation::stamp)
       .def_readwrite("applied", &LineObservation::applied)
-      .def_readwrite("sent", &LineObservation::sent);
+      .def_readwrite("sent", &LineObservation::sent)
+      .def_readwrite("latency", &LineObservation::latency);
   defKeywordInit(observation);
 
   py::class_<LineSearch>(m, "LineSearch", "The lost-line state machine pd and path use.")
@@ -587,11 +589,11 @@ void bindSteering(py::module_& m) {
       .def(
           "step",
           [](SteeringLaw& law, const LineMeasurement& measurement, double stamp,
-             const Twist2D& applied, const Twist2D& sent) {
-            return law.step({measurement, stamp, applied, sent});
+             const Twist2D& applied, const Twist2D& sent, std::optional<double> latency) {
+            return law.step({measurement, stamp, applied, sent, latency});
           },
           "measurement"_a, "stamp"_a, "applied"_a = Twist2D(), "sent"_a = Twist2D(),
-          "The command for one frame's measurement at `stamp` (s).")
+          "latency"_a = py::none(), "The command for one frame's measurement at `stamp` (s).")
       .def_property_readonly("state", &SteeringLaw::state)
       .def_property_readonly("mode", &SteeringLaw::mode)
       .def("reset", &SteeringLaw::reset, "Forgets all history.");

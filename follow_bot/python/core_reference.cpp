@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include <opencv2/imgcodecs.hpp>
@@ -98,7 +99,8 @@ int steer(int argc, char** argv) {
       return 1;
     }
     // A base without delay: what was sent after the last frame is what it did.
-    applied = law->step({detector.detect(frame), (i - 3) * kFramePeriod, applied, applied});
+    applied =
+        law->step({detector.detect(frame), (i - 3) * kFramePeriod, applied, applied, std::nullopt});
     std::printf("{\"frame\": \"%s\", ", argv[i]);
     printTwist(applied);
     std::printf(", \"state\": \"%s\"}\n", follow_bot::toString(law->state()));

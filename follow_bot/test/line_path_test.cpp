@@ -590,6 +590,24 @@ TEST(PathLaw, StampGoingBackwardsForgetsThePath) {
   EXPECT_EQ(follower.pathState().points, 1);
 }
 
+// A frame's measured latency replaces the configured command_latency, frame by frame.
+TEST(PathLaw, AFramesMeasuredLatencyOverridesTheConfiguredOne) {
+  for (const auto& [configured, measured] :
+       {std::pair<double, double>{0.1, 0.0}, std::pair<double, double>{0.0, 0.15}}) {
+    PathLaw told(atSpeed(0.3, configured), harnessCamera());
+    PathLaw configured_so(atSpeed(0.3, measured), harnessCamera());
+    for (int frame = 0; frame < 30; ++frame) {
+      const double stamp = frame * kFrameDt;
+      const Twist2D motion{0.3, 0.4 * std::sin(frame * 0.3)};
+      const LineMeasurement seen = bandMeasurement(300.0 + 2.0 * frame);
+      const Twist2D a = told.step({seen, stamp, motion, motion, measured});
+      const Twist2D b = configured_so.step({seen, stamp, motion, motion, std::nullopt});
+      EXPECT_EQ(a.linear, b.linear) << frame;
+      EXPECT_EQ(a.angular, b.angular) << frame;
+    }
+  }
+}
+
 TEST(PathLaw, LongFrameGapOrUnknownMotionForgetsThePath) {
   PathLaw follower(SteeringConfig(), harnessCamera());
   double stamp = 0.0;

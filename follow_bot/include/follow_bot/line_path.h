@@ -30,10 +30,11 @@
 // straight or another curve is bridged exactly. The law tracks the bridge like any remembered
 // stretch.
 //
-// A base executes a command command_latency s after the frame it was made from (its actuation
-// delay), and in the meantime still executes the commands sent in the latency before the frame.
-// The law therefore steers from the pose those commands will have taken the robot to: it replays
-// the last command_latency s of commands sent (frame.sent) from the base and evaluates the fit
+// A base executes a command a latency after the frame it was made from (its actuation delay:
+// measured from odometry by LatencyEstimator where the caller has it, else command_latency), and
+// in the meantime still executes the commands sent in the latency before the frame. The law
+// therefore steers from the pose those commands will have taken the robot to: it replays the
+// last latency of commands sent (frame.sent) from the base and evaluates the fit
 // and pure pursuit there. Steering from the frame's own pose instead acts on an offset a latency
 // old: at 0.5 m/s a 150 ms delay is 7.5 cm of travel, most of the law's 10 cm time constant,
 // and the robot weaves.
@@ -90,8 +91,8 @@ class PathLaw : public SteeringLaw {
   //  * when no path point remains ahead, the memory is cleared and the pd fallback steers; it
   //    has been shown the last sighting up to then, so its lost-line search is timed from the
   //    end of the remembered path and turns toward the side the line was last seen on.
-  //  * frame.sent, held over the last command_latency s of frames, places the pose it steers
-  //    from;
+  //  * frame.sent, held over the last frame.latency s of frames (command_latency when the
+  //    frame has none), places the pose it steers from;
   //  * with the memory run out, a band whose line runs against the remembered direction of
   //    travel, or whose direction is unmeasurable, counts as not seeing the line.
   Twist2D step(const LineObservation& frame) override;
@@ -130,7 +131,7 @@ class PathLaw : public SteeringLaw {
   };
 
   void moveMemory(const Twist2D& applied, double dt);
-  void recordSent(const Twist2D& sent, double dt, double stamp);
+  void recordSent(const Twist2D& sent, double dt, double stamp, double latency);
   // Whether a band's sighting may be taken as the line (the direction of travel rule).
   bool keepsDirection(const BandMeasurement& band, double stamp) const;
   // Remembers where a jump from `before` (the band's previous sighting) to `after` begins,
@@ -157,7 +158,7 @@ class PathLaw : public SteeringLaw {
   bool has_stamp_ = false;
   double last_stamp_ = 0.0;
   LineMeasurement last_sighting_;  // shown to the fallback while the path steers
-  std::deque<SentCommand> sent_;   // oldest first, the last command_latency s
+  std::deque<SentCommand> sent_;   // oldest first, the last latency s
   // Unit, base_link: the way the remembered path ran when it last steered.
   std::optional<cv::Point2d> travel_direction_;
   double travel_stamp_ = 0.0;

@@ -142,6 +142,9 @@ struct LineObservation {
   // frame. Only path uses it: the commands of the last command_latency s are still to be
   // executed. Zero (a caller that does not say) predicts no motion.
   Twist2D sent;
+  // s, the base's frame-to-motion delay as measured (LatencyEstimator); empty: the configured
+  // path.command_latency.
+  std::optional<double> latency;
 };
 
 class SteeringLaw {

@@ -383,8 +383,9 @@ Twist2D PathLaw::step(const LineObservation& frame) {
   has_stamp_ = true;
   last_stamp_ = stamp;
 
+  const double latency = frame.latency.value_or(config_.path.command_latency);
   moveMemory(frame.applied, dt);
-  recordSent(frame.sent, dt, stamp);
+  recordSent(frame.sent, dt, stamp, latency);
   forgetStalePoints(stamp);
   const LineMeasurement taken = remember(measurement, stamp);
 
@@ -397,9 +398,9 @@ Twist2D PathLaw::step(const LineObservation& frame) {
   appendBridges(positions, stamps);
 
   // Where the commands still to be executed take the base: the commands sent over the last
-  // command_latency s, replayed from here.
+  // latency, replayed from here.
   Pose2D predicted;
-  const double latency_start = stamp - config_.path.command_latency;
+  const double latency_start = stamp - latency;
   for (const SentCommand& command : sent_) {
     const double held = command.end - std::max(command.begin, latency_start);
     if (!(held > 0.0)) continue;
@@ -440,11 +441,11 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     points_.clear();
     bridges_.clear();
     path_state_.points = 0;
-    return fallback_.step(LineObservation{taken, stamp, frame.applied, frame.sent});
+    return fallback_.step(LineObservation{taken, stamp, frame.applied, frame.sent, frame.latency});
   }
   path_state_.points = static_cast<int>(points_.size());
   // Keeps the fallback's clock and last side in step, so it starts from the end of the path.
-  fallback_.step(LineObservation{last_sighting_, stamp, frame.applied, frame.sent});
+  fallback_.step(LineObservation{last_sighting_, stamp, frame.applied, frame.sent, frame.latency});
   return drive(*curvature);
 }
 
@@ -468,9 +469,9 @@ void PathLaw::moveMemory(const Twist2D& applied, double dt) {
   if (travel_direction_) travel_direction_ = rotated(*travel_direction_, -turn);
 }
 
-void PathLaw::recordSent(const Twist2D& sent, double dt, double stamp) {
+void PathLaw::recordSent(const Twist2D& sent, double dt, double stamp, double latency) {
   if (dt > 0.0) sent_.push_back(SentCommand{stamp - dt, stamp, sent});
-  while (!sent_.empty() && sent_.front().end <= stamp - config_.path.command_latency) {
+  while (!sent_.empty() && sent_.front().end <= stamp - latency) {
     sent_.pop_front();
   }
 }

@@ -5,12 +5,14 @@
 // lecture's, pd or path; makeSteeringLaw); BehaviourNodelet adds the camera topics, frame checks,
 // limits, the frame watchdog and the final stop. Thresholds and gains are ~params, also live
 // through dynamic_reconfigure.
+#include <cmath>
 #include <memory>
 #include <optional>
 
 #include <nav_msgs/Odometry.h>
 
 #include "follow_bot/FollowerConfig.h"
+#include "follow_bot/latency_estimator.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
 #include "messages.h"
@@ -28,6 +30,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
       odom_sub_ = subscribe<nav_msgs::Odometry>(nh, "odom", [this](const nav_msgs::Odometry& odom) {
         odom_twist_ = Twist2D{odom.twist.twist.linear.x, odom.twist.twist.angular.z};
         has_odom_ = true;
+        latency_.measured(CommandOutput::frameTime(odom.header).toSec(), odom_twist_);
       });
     }
   }
@@ -65,7 +68,21 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
       NODELET_WARN_THROTTLE(5.0, "path mode: no valid camera_info on %s yet, steering with pd",
                             cameraInfoTopic().c_str());
     }
-    return law_->step({seen, stamp, has_odom_ ? odom_twist_ : last_command_, last_command_});
+    return law_->step(
+        {seen, stamp, has_odom_ ? odom_twist_ : last_command_, last_command_, measuredLatency()});
+  }
+
+  // The base's delay from its odometry (~estimate_latency), said when first measured and when
+  // it moves by more than a frame at 30 Hz.
+  std::optional<double> measuredLatency() {
+    if (!settings_.estimate_latency || !has_odom_) return std::nullopt;
+    const std::optional<double> latency = latency_.latency();
+    if (latency && (!reported_latency_ || std::abs(*latency - *reported_latency_) > 0.033)) {
+      reported_latency_ = latency;
+      NODELET_INFO("path mode: the base's frame-to-motion delay measured on odom is %.3f s",
+                   *latency);
+    }
+    return latency;
   }
 
   LineState state() const { return law_->state(); }
@@ -105,6 +122,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
 
   void report(const Frame& frame, const Twist2D& sent) override {
     last_command_ = sent;
+    latency_.commandSent(frame.time, sent);
     if (status_pub_.getNumSubscribers() > 0) {
       status_pub_.publish(lineStatus(frame.header, seen_, toString(state()), sent));
     }
@@ -123,6 +141,8 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   bool odom_absence_said_ = false;
   bool has_odom_ = false;
   Twist2D odom_twist_;
+  LatencyEstimator latency_;
+  std::optional<double> reported_latency_;
   ros::Subscriber odom_sub_;
   ros::Publisher status_pub_;
 };

@@ -56,6 +56,7 @@ FollowerSettings followerSettings(const FollowerConfig& cfg) {
   steering.path.heading_gain = cfg.heading_gain;
   steering.path.lateral_gain = cfg.lateral_gain;
   steering.path.command_latency = cfg.command_latency;
+  settings.estimate_latency = cfg.estimate_latency;
   requireValid({validate(detector), validate(steering)});
   return settings;
 }

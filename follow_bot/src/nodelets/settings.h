@@ -10,6 +10,7 @@
 
 #include "follow_bot/BeaconChaserConfig.h"
 #include "follow_bot/FollowerConfig.h"
+#include "follow_bot/FollowerDefaults.h"
 #include "follow_bot/PanoramaConfig.h"
 #include "follow_bot/ParkerConfig.h"
 #include "follow_bot/beacon_controller.h"
@@ -26,6 +27,7 @@ namespace follow_bot {
 struct FollowerSettings {
   LineDetectorConfig detector;
   SteeringConfig steering;
+  bool estimate_latency = FollowerDefaults::estimate_latency;  // with odometry (~use_odom)
 };
 FollowerSettings followerSettings(const FollowerConfig& cfg);
 
