@@ -82,6 +82,7 @@ def plot_markers(out_path: Path | str, world: World, run: dict, frames: list[dic
     path = np.column_stack([run["x"], run["y"]])
     ax.plot(path[:, 0], path[:, 1], color="tab:blue", lw=1, label="true path")
     covered = [path]
+    named: set[str] = set()  # namespaces in the legend
     shown = np.unique(np.linspace(0, len(placed) - 1, SHOWN_FRAMES).round().astype(int))
     for rank, index in enumerate(shown if placed else []):
         frame = placed[index]
@@ -92,6 +93,9 @@ def plot_markers(out_path: Path | str, world: World, run: dict, frames: list[dic
                     arrowprops=robot)  # fmt: skip
         for marker in frame["markers"]:
             covered += _draw(ax, marker, alpha, rank == len(shown) - 1)
+            if marker["ns"] not in named:
+                named.add(marker["ns"])
+                ax.plot([], [], color=tuple(marker["colour"][:3]), lw=2, label=marker["ns"])
     corners = np.vstack(covered)
     low, high = corners.min(axis=0) - MAP_MARGIN_M, corners.max(axis=0) + MAP_MARGIN_M
     size = high - low
