@@ -21,6 +21,7 @@ import pytest
 import roslaunch.config
 import yaml
 
+from follow_bot.cfg import ParkerConfig
 from harness.marker_map import load_frames, to_world
 from harness.world import load_world, resolve_world_path
 
@@ -36,7 +37,7 @@ BALL_RANGE_M = 0.05  # measured 2.1 cm (the text's 5 mm rounding included)
 TAG_CENTRE_M = 0.004  # measured 1.5 mm, the tag 0.5-1.5 m away
 PARKING_GOAL_M = 0.025  # measured 1.0 cm
 TAG_NORMAL_DEG = 3.0  # measured 1.1 deg (1.2 m away)
-STANDOFF_M = 0.5  # cfg/Parker.cfg's ~standoff, which the scenario leaves at its default
+STANDOFF_M = ParkerConfig.defaults["standoff"]  # the scenario leaves ~standoff at its default
 
 
 def displayed_topics(config: dict) -> list[str]:
