@@ -44,20 +44,6 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
     }
   }
 
-  // The marker (its outward normal from its centre) and the pose the robot parks at: standoff
-  // in front of it, facing it.
-  void addMarkers(RvizMarkers& markers) override {
-    if (!marker_) return;
-    const MarkerInBase placed = markerInBase(*marker_, camera());
-    const cv::Point3d centre(placed.centre);
-    markers.sphere("marker", 0, centre, 0.08, rgba(1.0, 1.0, 0.0));
-    markers.arrow("marker", 1, centre, placed.outward_normal, 0.3, rgba(1.0, 1.0, 0.0));
-    const cv::Vec2d out =
-        cv::normalize(cv::Vec2d(placed.outward_normal[0], placed.outward_normal[1]));
-    const cv::Point3d goal(centre.x + standoff_ * out[0], centre.y + standoff_ * out[1], 0.0);
-    markers.arrow("goal", 0, goal, cv::Vec3d(-out[0], -out[1], 0.0), 0.3, rgba(0.0, 1.0, 0.0));
-  }
-
   void advertise(ros::NodeHandle&, ros::NodeHandle& pnh) override {
     pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("target_pose", 1);
     state_pub_ = pnh.advertise<std_msgs::String>("state", 1);
@@ -99,6 +85,20 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
     if (marker_) drawMarker(canvas, *marker_, camera());
     cv::putText(canvas, state_, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.7,
                 cv::Scalar(255, 255, 255), 2);
+  }
+
+  // The marker (its outward normal from its centre) and the pose the robot parks at: standoff
+  // in front of it, facing it.
+  void addMarkers(RvizMarkers& markers) override {
+    if (!marker_) return;
+    const MarkerInBase placed = markerInBase(*marker_, camera());
+    const cv::Point3d centre(placed.centre);
+    markers.sphere("marker", 0, centre, 0.08, rgba(1.0, 1.0, 0.0));
+    markers.arrow("marker", 1, centre, placed.outward_normal, 0.3, rgba(1.0, 1.0, 0.0));
+    const cv::Vec2d out =
+        cv::normalize(cv::Vec2d(placed.outward_normal[0], placed.outward_normal[1]));
+    const cv::Point3d goal(centre.x + standoff_ * out[0], centre.y + standoff_ * out[1], 0.0);
+    markers.arrow("goal", 0, goal, cv::Vec3d(-out[0], -out[1], 0.0), 0.3, rgba(0.0, 1.0, 0.0));
   }
 
   std::unique_ptr<MarkerDetector> detector_;
