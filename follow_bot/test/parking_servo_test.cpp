@@ -160,6 +160,22 @@ TEST(ParkingServo, ParkingErrorOfASquareView) {
   EXPECT_NEAR(error.bearing, std::atan2(0.1, 0.7), 1e-9);  // marker to the robot's left
 }
 
+TEST(ParkingServo, MarkerInBaseOfASquareView) {
+  ParkingServoConfig config;
+  config.camera.pitch_rad = 0.0;
+  // Facing the marker (world -x) from 0.7 m in front of it, 0.1 m to its left (world +y): the
+  // marker is 0.7 m ahead and 0.1 m to the robot's left, its face toward the robot.
+  const std::optional<MarkerObservation> marker = observe(Pose2D{0.7, 0.1, kPi}, config.camera);
+  ASSERT_TRUE(marker);
+  const MarkerInBase placed = markerInBase(*marker, config.camera);
+  EXPECT_NEAR(placed.centre[0], 0.7, 1e-9);
+  EXPECT_NEAR(placed.centre[1], 0.1, 1e-9);
+  EXPECT_NEAR(placed.centre[2], config.camera.height_m, 1e-9);
+  EXPECT_NEAR(placed.outward_normal[0], -1.0, 1e-9);
+  EXPECT_NEAR(placed.outward_normal[1], 0.0, 1e-9);
+  EXPECT_NEAR(placed.outward_normal[2], 0.0, 1e-9);
+}
+
 TEST(ParkingServo, KeepsTheMarkerInsideTheViewCameraInfoReports) {
   // 1 m from the marker, 10 deg off its normal, the marker 10 deg right of the heading. With the
   // 60 deg lens the servo swings further (b* = -15.5 deg, clamped by the view): it turns left.

@@ -106,6 +106,12 @@ struct RectifiedBlob {
 RectifiedBlob rectifyBlob(const ColourBlob& blob, const CameraGeometry& camera,
                           const cv::Size& frame_size);
 
+// The centre (base_link) of the sphere of radius `radius_m` a found blob of a frame of the given
+// size shows: sphereCentreFromCircle on the rectified blob. Empty when the blob touches the
+// frame's edge (the circle would not be the whole ball's) or nothing fits.
+std::optional<cv::Point3d> sphereCentre(const ColourBlob& blob, int image_width, int image_height,
+                                        const CameraGeometry& camera, double radius_m);
+
 // Both range estimates for a found blob of `object` in a frame of the given size (an estimate
 // whose condition above fails is left empty; a blob that is not found gives neither).
 RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_height,

@@ -70,6 +70,13 @@ struct ParkingError {
   double bearing = 0;
 };
 
+// A marker seen from the camera (its pose in the optical frame) placed in base_link.
+struct MarkerInBase {
+  cv::Vec3d centre;
+  cv::Vec3d outward_normal;  // unit, out of the marker's face (toward a viewer in front)
+};
+MarkerInBase markerInBase(const MarkerObservation& marker, const CameraGeometry& camera);
+
 // The parking error for a marker pose in the camera optical frame.
 ParkingError parkingError(const MarkerObservation& marker, const CameraGeometry& camera);
 

@@ -139,27 +139,34 @@ RectifiedBlob rectifyBlob(const ColourBlob& blob, const CameraGeometry& camera,
   return rectified;
 }
 
+std::optional<cv::Point3d> sphereCentre(const ColourBlob& blob, int image_width, int image_height,
+                                        const CameraGeometry& camera, double radius_m) {
+  const cv::Rect& box = blob.bounding_box;
+  if (!blob.found || box.x <= 0 || box.y <= 0 || box.x + box.width >= image_width ||
+      box.y + box.height >= image_height) {
+    return std::nullopt;
+  }
+  const RectifiedBlob rectified = rectifyBlob(blob, camera, cv::Size(image_width, image_height));
+  return sphereCentreFromCircle(camera, rectified.circle_centre, rectified.circle_radius, radius_m);
+}
+
 RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_height,
                             const CameraGeometry& camera, const BeaconObject& object) {
   RangeEstimate estimate;
   if (!blob.found || !(object.size_m > 0.0)) return estimate;
+  if (object.shape == BeaconShape::kSphere) {
+    const std::optional<cv::Point3d> centre =
+        sphereCentre(blob, image_width, image_height, camera, object.size_m);
+    if (centre)
+      estimate.from_size = std::max(0.0, std::hypot(centre->x, centre->y) - object.size_m);
+    return estimate;
+  }
   // Cut by the frame's edges: the raw box against the raw frame.
   const cv::Rect& box = blob.bounding_box;
   const RectifiedBlob rectified = rectifyBlob(blob, camera, cv::Size(image_width, image_height));
   const bool cut_left = box.x <= 0;
   const bool cut_right = box.x + box.width >= image_width;
-  const bool cut_top = box.y <= 0;
   const bool cut_bottom = box.y + box.height >= image_height;
-
-  if (object.shape == BeaconShape::kSphere) {
-    if (cut_left || cut_right || cut_top || cut_bottom) return estimate;
-    const std::optional<cv::Point3d> centre = sphereCentreFromCircle(
-        camera, rectified.circle_centre, rectified.circle_radius, object.size_m);
-    if (centre)
-      estimate.from_size = std::max(0.0, std::hypot(centre->x, centre->y) - object.size_m);
-    return estimate;
-  }
-
   if (!cut_left && !cut_right) {
     const std::optional<double> depth = rangeFromWidth(camera.fx, object.size_m, rectified.width);
     if (depth) estimate.from_size = std::max(0.0, *depth + camera.x_offset_m);

@@ -88,13 +88,19 @@ std::string validate(const ParkingServoConfig& config) {
   return "";
 }
 
-ParkingError parkingError(const MarkerObservation& marker, const CameraGeometry& camera) {
+MarkerInBase markerInBase(const MarkerObservation& marker, const CameraGeometry& camera) {
   const cv::Matx33d base_from_camera = cameraToBase(camera.pitch_rad);
-  const cv::Vec3d position =
-      base_from_camera * marker.translation + cv::Vec3d(camera.x_offset_m, 0, camera.height_m);
   const cv::Vec3d into_marker =
       base_from_camera *
       cv::Vec3d(marker.rotation(0, 2), marker.rotation(1, 2), marker.rotation(2, 2));
+  return {base_from_camera * marker.translation + cv::Vec3d(camera.x_offset_m, 0, camera.height_m),
+          -cv::normalize(into_marker)};
+}
+
+ParkingError parkingError(const MarkerObservation& marker, const CameraGeometry& camera) {
+  const MarkerInBase placed = markerInBase(marker, camera);
+  const cv::Vec3d& position = placed.centre;
+  const cv::Vec3d into_marker = -placed.outward_normal;
   const cv::Vec2d normal = -cv::normalize(cv::Vec2d(into_marker[0], into_marker[1]));
   const cv::Vec2d robot(-position[0], -position[1]);  // robot origin relative to the marker
   ParkingError error;

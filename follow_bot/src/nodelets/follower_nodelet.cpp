@@ -8,17 +8,39 @@
 #include <cmath>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <nav_msgs/Odometry.h>
 
 #include "follow_bot/FollowerConfig.h"
 #include "follow_bot/latency_estimator.h"
+#include "follow_bot/line_path.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
 #include "messages.h"
 #include "settings.h"
 
 namespace follow_bot {
+
+namespace {
+
+// The floor arc the robot drives in `horizon_s` under `command` (from base_link's origin), in
+// steps of `step_s`.
+std::vector<cv::Point2d> predictedArc(const Twist2D& command, double horizon_s, double step_s) {
+  std::vector<cv::Point2d> arc;
+  for (double t = 0.0; t <= horizon_s + 1e-9; t += step_s) {
+    const double heading = command.angular * t;
+    const double along = command.linear * t;
+    // The exact arc; a straight line while the turn is negligible.
+    arc.push_back(std::abs(command.angular) < 1e-6
+                      ? cv::Point2d(along, 0.0)
+                      : cv::Point2d(std::sin(heading), 1.0 - std::cos(heading)) *
+                            (command.linear / command.angular));
+  }
+  return arc;
+}
+
+}  // namespace
 
 class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
  private:
@@ -130,6 +152,24 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
 
   void drawDebug(cv::Mat& canvas) override { detector_->drawDebug(canvas, seen_); }
 
+  // The bands' line centres on the floor (where path mode places its sightings), path mode's
+  // remembered line and the arc the last command drives over the next second.
+  void addMarkers(RvizMarkers& markers) override {
+    std::vector<cv::Point2d> sightings;
+    for (const BandMeasurement* band : {&seen_.band, &seen_.look_ahead}) {
+      if (!band->centre_found) continue;
+      if (const std::optional<cv::Point2d> centre = floorCentre(*band, camera())) {
+        sightings.push_back(*centre);
+      }
+    }
+    markers.floorPoints("sightings", sightings, rgba(1.0, 0.5, 0.0), 0.05);
+    if (const auto* path = dynamic_cast<const PathLaw*>(law_.get())) {
+      markers.floorLine("path", path->pathPoints(), rgba(0.0, 0.8, 1.0), 0.02);
+    }
+    markers.floorLine("command_arc", predictedArc(last_command_, 1.0, 0.1), rgba(1.0, 0.0, 1.0),
+                      0.01);
+  }
+
   std::unique_ptr<LineDetector> detector_;
   std::unique_ptr<SteeringLaw> law_;
   FollowerSettings settings_;
@@ -156,5 +196,7 @@ follow_bot::NodeHelp follow_bot::followerHelp() {
       "Follows a coloured line on the floor (lecture, pd or path steering, ~mode).",
       {{"in", "odom", "nav_msgs/Odometry", "with ~use_odom (the default)"},
        {"out", "~line", "follow_bot/LineStatus", "centroid, error, confidence, state, command"},
-       {"out", "~debug_image", "sensor_msgs/Image", "lazy: band, line pixels, centroid"}});
+       {"out", "~debug_image", "sensor_msgs/Image", "lazy: band, line pixels, centroid"},
+       {"out", "~markers", "visualization_msgs/MarkerArray",
+        "lazy, in ~base_frame: band sightings, remembered path, command arc"}});
 }

@@ -26,7 +26,7 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   // The ~params are read once: a capture must keep the schedule it started with.
   PanoramaNodelet()
       : BehaviourNodelet({/*allow_reverse=*/false, /*live_reconfigure=*/false,
-                          /*debug_image=*/false}) {}
+                          /*debug_image=*/false, /*markers=*/false}) {}
 
  private:
   void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const PanoramaConfig&) override {

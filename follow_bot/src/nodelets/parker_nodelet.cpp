@@ -36,6 +36,7 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
     servo_ = std::make_unique<ParkingServo>(parkingServoConfig(config, camera()));
     detector_ = std::move(detector);
     marker_frame_ = config.marker_frame;
+    standoff_ = config.standoff;
     if (!config.publish_tf) {
       tf_broadcaster_.reset();
     } else if (!tf_broadcaster_) {
@@ -86,9 +87,24 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
                 cv::Scalar(255, 255, 255), 2);
   }
 
+  // The marker (its outward normal from its centre) and the pose the robot parks at: standoff
+  // in front of it, facing it.
+  void addMarkers(RvizMarkers& markers) override {
+    if (!marker_) return;
+    const MarkerInBase placed = markerInBase(*marker_, camera());
+    const cv::Point3d centre(placed.centre);
+    markers.sphere("marker", 0, centre, 0.08, rgba(1.0, 1.0, 0.0));
+    markers.arrow("marker", 1, centre, placed.outward_normal, 0.3, rgba(1.0, 1.0, 0.0));
+    const cv::Vec2d out =
+        cv::normalize(cv::Vec2d(placed.outward_normal[0], placed.outward_normal[1]));
+    const cv::Point3d goal(centre.x + standoff_ * out[0], centre.y + standoff_ * out[1], 0.0);
+    markers.arrow("goal", 0, goal, cv::Vec3d(-out[0], -out[1], 0.0), 0.3, rgba(0.0, 1.0, 0.0));
+  }
+
   std::unique_ptr<MarkerDetector> detector_;
   std::unique_ptr<ParkingServo> servo_;
   std::string marker_frame_;
+  double standoff_ = 0.0;  // m, base origin to the marker's centre along its normal when parked
   std::optional<MarkerObservation> marker_;  // the last frame's
   std::string state_;                        // the last frame's
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
@@ -105,5 +121,7 @@ follow_bot::NodeHelp follow_bot::parkerHelp() {
       "Parks the robot square in front of an AprilTag or a textured sign (~target).",
       {{"out", "~target_pose", "geometry_msgs/PoseStamped", "the marker in the camera frame"},
        {"out", "~state", "std_msgs/String", "searching, approaching, aligning, parked or lost"},
-       {"out", "~debug_image", "sensor_msgs/Image", "lazy: outline, id, axes"}});
+       {"out", "~debug_image", "sensor_msgs/Image", "lazy: outline, id, axes"},
+       {"out", "~markers", "visualization_msgs/MarkerArray",
+        "lazy, in ~base_frame: the marker's centre and normal, the parking goal"}});
 }

@@ -26,19 +26,10 @@ def _format_metrics(metrics: dict) -> str:
     return textwrap.fill(", ".join(parts), width=90)
 
 
-def plot_run(
-    out_path: Path | str,
-    world: World,
-    path,
-    *,
-    goal: tuple[float, float, float] | None = None,
-    metrics: dict | None = None,
-    title: str | None = None,
-) -> Path:
-    """Write a PNG map of the run; `path` is N x 2 (or N x 3 poses), goal is (x, y, yaw)."""
-    pts = np.asarray(path, dtype=float)
-    pts = pts.reshape(0, 2) if pts.size == 0 else pts
-    fig = Figure(figsize=(8, 8), dpi=100)
+def floor_map(world: World, size_in: tuple[float, float]):
+    """A figure of `size_in` inches with the world's floor and objects drawn top-down; the
+    figure, its axes and the floor's extent (x0, x1, y0, y1)."""
+    fig = Figure(figsize=size_in, dpi=100)
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     tex, tex_to_world = ground_texture(world)
@@ -64,6 +55,25 @@ def plot_run(
             ax.plot([x - dx, x + dx], [y - dy, y + dy], color="k", lw=3)
             ax.arrow(x, y, 0.3 * math.cos(yaw), 0.3 * math.sin(yaw), width=0.02, color="k")
         ax.annotate(obj.name, obj.pose[:2] if not isinstance(obj, Sphere) else obj.position[:2])
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return fig, ax, extent
+
+
+def plot_run(
+    out_path: Path | str,
+    world: World,
+    path,
+    *,
+    goal: tuple[float, float, float] | None = None,
+    metrics: dict | None = None,
+    title: str | None = None,
+) -> Path:
+    """Write a PNG map of the run; `path` is N x 2 (or N x 3 poses), goal is (x, y, yaw)."""
+    pts = np.asarray(path, dtype=float)
+    pts = pts.reshape(0, 2) if pts.size == 0 else pts
+    fig, ax, extent = floor_map(world, (8, 8))
     if len(pts):
         ax.plot(pts[:, 0], pts[:, 1], color="tab:blue", lw=1.5, label="path")
         ax.plot(*pts[0, :2], "o", color="tab:green", ms=8, label="start")
@@ -73,9 +83,6 @@ def plot_run(
         ax.arrow(goal[0], goal[1], 0.3 * math.cos(goal[2]), 0.3 * math.sin(goal[2]), width=0.01)
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
     ax.legend(loc="upper right", fontsize="small")
     heading = title or world.name
     if metrics:

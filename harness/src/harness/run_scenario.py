@@ -1,5 +1,5 @@
 """`rosrun harness run_scenario SCENARIO.yaml [...] [--jobs N | --scheduler tcp://HOST:PORT]
-[--out DIR] [--video] [--contact-sheet [N]]`
+[--out DIR] [--video] [--contact-sheet [N]] [--markers]`
 
 Plays each scenario in a ROS graph of its own: its own roscore on a free port, its own ROS_HOME
 and log folder, the behaviour's launch file (or the scripted constant-Twist driver), then the
@@ -8,7 +8,9 @@ each run is a task on that Dask cluster (played the same way on a worker, in a t
 folder sent back and unpacked under DIR). Afterwards it scores each recorded
 run and writes DIR/<scenario>/result.json (all metrics and each criterion), run.png (floor map
 with the driven path), with --video camera.mp4, and with --contact-sheet contact_sheet.png (N
-frames of the camera video with the behaviour's debug overlay, in a grid); DIR/summary.json and
+frames of the camera video with the behaviour's debug overlay, in a grid), with --markers
+markers.json (the behaviour's ~markers, harness.marker_record) and markers.png (some of them
+placed by the true pose over the floor, harness.marker_map); DIR/summary.json and
 DIR/report.md add up all runs (success rate with its 95 % Wilson interval). Exits 1 when a
 criterion fails, 2 when a scenario cannot be run.
 """
@@ -38,6 +40,7 @@ from tqdm import tqdm
 
 from harness.camera import Camera
 from harness.contact_sheet import DEFAULT_FRAMES, write_contact_sheet
+from harness.marker_map import load_frames, plot_markers
 from harness.plot import plot_run
 from harness.report import format_value, headline, headline_text, write_summary
 from harness.scenario import (
@@ -194,11 +197,17 @@ def show_progress(scenario: Scenario, env: dict, processes: list[subprocess.Pope
 
 
 def run_one(
-    scenario: Scenario, out: Path, video: bool, progress: bool = False, sheet: int = 0
+    scenario: Scenario,
+    out: Path,
+    video: bool,
+    progress: bool = False,
+    sheet: int = 0,
+    markers: bool = False,
 ) -> dict:
     """Runs one scenario end to end in a ROS graph of its own; returns the result written to
     result.json. `progress`: show the run's sim time on stderr while it plays; `sheet` > 0: also
-    a contact sheet of that many frames (from the camera video, recorded for it)."""
+    a contact sheet of that many frames (from the camera video, recorded for it); `markers`: also
+    record the behaviour's ~markers and draw them."""
     out.mkdir(parents=True, exist_ok=True)
     world = scenario_world(scenario)  # with the scenario's camera mounting
     ros_home = out / "ros_home"
@@ -238,6 +247,11 @@ def run_one(
             if not wait_for_node(port, "/robot_state_publisher", 60.0, description):
                 raise RuntimeError(f"robot_state_publisher did not start (see {out}/ros.log)")
             start(behaviour_command(scenario))
+            if markers:  # before the simulator: it misses the first frames at most
+                recorder = start([sys.executable, "-m", "harness.marker_record",
+                                  f"_out:={out / 'markers.json'}"])  # fmt: skip
+                if not wait_for_node(port, "/marker_record", 60.0, recorder):
+                    raise RuntimeError(f"marker_record did not start (see {out}/ros.log)")
             sim_command = [
                 "rosrun", "harness", "sim", f"_scenario:={spec}", f"_record:={record}",
             ]  # fmt: skip
@@ -275,6 +289,9 @@ def run_one(
         goal = (x, y, yaw)
     path = np.column_stack([run["x"], run["y"], run["yaw"]])
     plot_run(out / "run.png", world, path, goal=goal, metrics=headline(values), title=scenario.name)
+    if markers:
+        frames = load_frames(out / "markers.json")
+        plot_markers(out / "markers.png", world, run, frames, f"{scenario.name}: ~markers")
     if sheet:
         try:
             write_contact_sheet(
@@ -286,11 +303,16 @@ def run_one(
 
 
 def play(
-    scenario: Scenario, out: Path, video: bool, progress: bool = False, sheet: int = 0
+    scenario: Scenario,
+    out: Path,
+    video: bool,
+    progress: bool = False,
+    sheet: int = 0,
+    markers: bool = False,
 ) -> dict:
     """run_one's result, or an error entry when the scenario could not be run."""
     try:
-        return run_one(scenario, out / scenario.name, video, progress, sheet)
+        return run_one(scenario, out / scenario.name, video, progress, sheet, markers)
     except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
         return error_entry(scenario, str(error))
 
@@ -320,7 +342,12 @@ def describe(result: dict) -> list[str]:
 
 
 def run_all(
-    scenarios: list[Scenario], out: Path, video: bool = False, jobs: int = 1, sheet: int = 0
+    scenarios: list[Scenario],
+    out: Path,
+    video: bool = False,
+    jobs: int = 1,
+    sheet: int = 0,
+    markers: bool = False,
 ) -> list[dict]:
     """Every scenario's result (in the given order), `jobs` at a time, with a progress bar."""
     results: list[dict | None] = [None] * len(scenarios)
@@ -330,7 +357,8 @@ def run_all(
     ):
         # One run at a time: its sim time too.
         futures = {
-            pool.submit(play, s, out, video, jobs == 1, sheet): i for i, s in enumerate(scenarios)
+            pool.submit(play, s, out, video, jobs == 1, sheet, markers): i
+            for i, s in enumerate(scenarios)
         }
         for future in as_completed(futures):
             result = results[futures[future]] = future.result()
@@ -362,6 +390,12 @@ def main(argv: list[str] | None = None) -> int:
         metavar="N",
         help=f"also write contact_sheet.png: N frames (default {DEFAULT_FRAMES}) of the camera "
         "video with the behaviour's debug overlay, in a grid (records the video)",
+    )
+    parser.add_argument(
+        "--markers",
+        action="store_true",
+        help="also record the behaviour's ~markers (markers.json) and draw them over the floor "
+        "(markers.png)",
     )
     parser.add_argument(
         "--jobs", type=int, default=1, help="scenarios run at once, each in its own ROS graph"
@@ -399,7 +433,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"run_scenario: scheduler {args.scheduler}: {error}", file=sys.stderr)
             return 2
     else:
-        results = run_all(scenarios, args.out, args.video, args.jobs, args.contact_sheet)
+        results = run_all(
+            scenarios, args.out, args.video, args.jobs, args.contact_sheet, args.markers
+        )
     summary = write_summary(args.out, results)
     width = max(len(r["scenario"]) for r in results)
     print("\nsummary")

@@ -26,6 +26,7 @@
 #include "follow_bot_common/ros/command_output.h"
 #include "follow_bot_common/ros/node_help.h"
 #include "follow_bot_common/ros/params.h"
+#include "follow_bot_common/ros/rviz_markers.h"
 #include "follow_bot_common/ros/topics.h"
 #include "follow_bot_common/status_report.h"
 
@@ -68,6 +69,7 @@ struct BehaviourOptions {
   bool allow_reverse = false;    // CommandOutput may command negative linear speeds
   bool live_reconfigure = true;  // a dynamic_reconfigure server on the ~params
   bool debug_image = true;       // a ~debug_image topic, drawn only while someone listens
+  bool markers = true;           // a ~markers topic, built only while someone listens
 };
 
 // The nodelet of a behaviour driven by camera frames (`Config`: its generated dynamic_reconfigure
@@ -98,8 +100,8 @@ struct BehaviourOptions {
 //    counted under its outcome in the diagnostics, CommandOutput::frameHandled), the camera's
 //    mounting for the frame (until it is known the behaviour holds still: an idle decision in state
 //    "waiting for camera mounting", no step()), then per accepted frame step(), the one
-//    CommandOutput::send (cmd_vel, ~status, watchdog, ~enable, final stop), report() and a lazy
-//    ~debug_image.
+//    CommandOutput::send (cmd_vel, ~status, watchdog, ~enable, final stop), report(), a lazy
+//    ~debug_image and lazy ~markers (in ~base_frame, with the frame's stamp).
 //  * a behaviour's own diagnostics (addDiagnostics), updated before each frame's step().
 //  * every callback runs guarded (an exception drops the message, never the node) and under
 //    mutex(), the one the dynamic_reconfigure server shares.
@@ -134,6 +136,8 @@ class BehaviourNodelet : public CheckedNodelet {
   // Draws the last step's findings on a copy of its frame (only while ~debug_image has a
   // subscriber).
   virtual void drawDebug(cv::Mat& /*canvas*/) {}
+  // Adds what the last step believes, in the base frame (only while ~markers has a subscriber).
+  virtual void addMarkers(RvizMarkers& /*markers*/) {}
 
   const CameraGeometry& camera() const { return camera_; }  // mounting and latest intrinsics
   bool hasIntrinsics() const { return has_intrinsics_; }
@@ -205,6 +209,8 @@ class BehaviourNodelet : public CheckedNodelet {
     if (options_.debug_image) {
       debug_pub_ = image_transport::ImageTransport(pnh).advertise("debug_image", 1);
     }
+    if (options_.markers)
+      markers_pub_ = pnh.advertise<visualization_msgs::MarkerArray>("markers", 1);
     camera_info_sub_ = subscribe<sensor_msgs::CameraInfo>(
         nh, topics::kCameraInfo, [this](const sensor_msgs::CameraInfo& info) {
           bool usable = false;  // unless onCameraInfo gets to take it
@@ -332,9 +338,9 @@ class BehaviourNodelet : public CheckedNodelet {
     frame_size_ = image->image.size();
     const Frame frame{msg->header, image->image, CommandOutput::frameTime(msg->header).toSec()};
     updateDiagnostics();
-    const Decision decision = updateMounting(msg->header.frame_id)
-                                  ? step(frame)
-                                  : Decision{{}, false, CameraMountingSource::kWaitingState};
+    const bool mounted = updateMounting(msg->header.frame_id);
+    const Decision decision =
+        mounted ? step(frame) : Decision{{}, false, CameraMountingSource::kWaitingState};
     const Twist2D sent =
         output_->send(msg->header, decision.desired, decision.active, decision.state);
     report(frame, sent);
@@ -342,6 +348,13 @@ class BehaviourNodelet : public CheckedNodelet {
       cv_bridge::CvImage debug(msg->header, "bgr8", image->image.clone());
       drawDebug(debug.image);
       debug_pub_.publish(debug.toImageMsg());
+    }
+    if (options_.markers && markers_pub_.getNumSubscribers() > 0) {
+      std_msgs::Header header = msg->header;
+      header.frame_id = mounting_->baseFrame();
+      RvizMarkers markers(header);
+      if (mounted) addMarkers(markers);  // else only the clearing: nothing was believed
+      markers_pub_.publish(markers.message());
     }
     return FrameOutcome::kAccepted;
   }
@@ -382,6 +395,7 @@ class BehaviourNodelet : public CheckedNodelet {
   std::unique_ptr<dynamic_reconfigure::Server<Unclamped<Config>>> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;  // the behaviour's own, if any
   image_transport::Publisher debug_pub_;
+  ros::Publisher markers_pub_;
   ros::Subscriber camera_info_sub_;
   image_transport::Subscriber image_sub_;
 };

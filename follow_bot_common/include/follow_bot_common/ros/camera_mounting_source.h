@@ -48,6 +48,8 @@ class CameraMountingSource {
   // whenever it changes.
   bool update(const std::string& frame_id, CameraGeometry& camera, bool& changed);
 
+  const std::string& baseFrame() const { return base_frame_; }
+
  private:
   // The mounting from tf, or empty with `why` set.
   std::optional<CameraGeometry> fromTf(const std::string& frame_id, const CameraGeometry& camera,
