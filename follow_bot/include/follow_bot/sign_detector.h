@@ -115,7 +115,7 @@ class SignDetector : public MarkerDetector {
 
   SignDetectorConfig config_;
   double height_m_ = 0.0;
-  std::vector<cv::Mat> textures_;  // the picture in grey levels, then ever narrower copies
+  std::vector<cv::Mat> textures_;  // the picture in float grey levels, then ever narrower copies
   cv::Ptr<cv::SIFT> sift_;
   cv::BFMatcher matcher_{cv::NORM_L2};
   std::vector<cv::Point3f> reference_points_;  // keypoints on the sign plane, metres, z = 0
