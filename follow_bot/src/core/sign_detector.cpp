@@ -38,8 +38,8 @@ constexpr int kMinTextureCols = 16;
 constexpr double kAlignEpsilonPx = 1e-2;
 // Fraction of the Gauss-Newton step taken: whole steps overshot the far sign's tilt nearly
 // twofold, and it oscillated around the optimum instead of converging (measured on the
-// fronto-parallel sweep: +-0.025 px at the corners after 30 steps; with half steps the
-// corners settle below 0.01 px in 3-5).
+// fronto-parallel sweep: +-0.025 px at the corners after 30 steps; with half steps they
+// settle below 0.01 px within 6).
 constexpr double kAlignStep = 0.5;
 
 // A sign last seen larger than this (its smaller side, pixels) is searched at half resolution.
