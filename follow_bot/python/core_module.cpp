@@ -656,9 +656,10 @@ void bindSignDetector(py::module_& m) {
       .def_readwrite("track_refine_iterations", &Config::track_refine_iterations);
   defKeywordInit(config, static_cast<Validator<Config>>(&validate));
 
-  py::class_<SignDetector>(m, "SignDetector",
-                           "The parker's textured-sign detector (SIFT, RANSAC, ECC, IPPE) and "
-                           "tracker.")
+  py::class_<SignDetector>(
+      m, "SignDetector",
+      "The parker's textured-sign detector (SIFT, RANSAC, render-and-align, IPPE) and "
+      "tracker.")
       .def(py::init<const Config&>(), "config"_a)
       .def(
           "detect",

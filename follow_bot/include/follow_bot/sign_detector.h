@@ -1,9 +1,9 @@
 // Finds a known textured sign (a reference picture of known physical width) in camera images and
 // measures its pose: SIFT features of the reference, matched with Lowe's ratio test, a RANSAC
-// homography with an inlier minimum, refined by aligning the image (ECC) to a rendering of the
-// reference under that homography (keypoints alone are good to ~0.3 px, too coarse for the tilt
-// and depth of a far sign), then the planar pose from the refined homography and the sign's
-// metric size (IPPE, both solutions, LM-refined).
+// homography with an inlier minimum, refined by aligning the image (ECC's model, solved in
+// doubles) to a rendering of the reference under that homography (keypoints alone are good to
+// ~0.3 px, too coarse for the tilt and depth of a far sign), then the planar pose from the
+// refined homography and the sign's metric size (IPPE, both solutions, LM-refined).
 //
 // After a detection the sign is tracked instead of searched for: corners inside it in the last
 // frame are followed into the new frame (pyramidal Lucas-Kanade), a RANSAC homography through
@@ -37,10 +37,10 @@ struct SignDetectorConfig {
   int min_reference_features = 50;         // fewer makes the reference featureless: startup error
   int max_image_features = 0;              // strongest keypoints kept per camera image (0 = all)
   double max_reprojection_error_px = 2.0;  // RMS over the inliers of the final pose, else rejected
-  int refine_passes = 2;       // render-and-align (ECC) passes before the pose; 0 = keypoints only
-  int refine_iterations = 30;  // ECC iteration limit per pass
-  double min_correlation = 0.8;      // ECC correlation needed to use the refined homography
-  double max_refine_shift_px = 3.0;  // larger corner moves by ECC mean it diverged: keep RANSAC's
+  int refine_passes = 2;             // render-and-align passes before the pose; 0 = keypoints only
+  int refine_iterations = 30;        // alignment step limit per pass (it stops once converged)
+  double min_correlation = 0.8;      // correlation needed to use the refined homography
+  double max_refine_shift_px = 3.0;  // larger corner moves mean it diverged: keep RANSAC's
   // When the two planar-pose solutions' RMS errors differ by less than this (pixels), they cannot
   // be told apart reliably and the one nearest the previous frame's pose is kept.
   double ambiguity_px = 0.05;
@@ -50,9 +50,9 @@ struct SignDetectorConfig {
   int track_levels = 3;               // pyramid levels above full resolution
   double max_track_motion_px = 80.0;  // a corner of the sign moving further: lost, search again
   // A tracked frame starts the alignment within a fraction of a pixel, so it needs fewer passes
-  // and iterations than a searched one (ECC is most of a frame's cost).
+  // and steps than a searched one (the alignment is much of a frame's cost).
   int track_refine_passes = 1;      // render-and-align passes on a tracked frame, all required
-  int track_refine_iterations = 5;  // ECC iteration limit per pass on a tracked frame
+  int track_refine_iterations = 5;  // alignment step limit per pass on a tracked frame
 };
 
 // Empty when the configuration is usable (the image itself is checked by the constructor),
@@ -106,16 +106,16 @@ class SignDetector : public MarkerDetector {
                                             const Matches& matches, bool tracked);
   // The sign's corners TL, TR, BR, BL on its plane, metres.
   std::vector<cv::Point2d> outlinePlane() const;
-  // One render-and-align pass of at most `iterations` ECC steps on a sign-plane (metres) to
+  // One render-and-align pass of at most `iterations` steps on a sign-plane (metres) to
   // rectified-pixel homography, in place (through a lens, on the rectified patch of the raw
-  // frame); false (and the homography untouched) when ECC fails, correlates poorly or moves the
-  // corners too far.
+  // frame); false (and the homography untouched) when the alignment fails, correlates poorly or
+  // moves the corners too far.
   bool refineHomography(const cv::Mat& gray, const CameraGeometry& camera, int iterations,
                         cv::Matx33d& plane_to_image);
 
   SignDetectorConfig config_;
   double height_m_ = 0.0;
-  std::vector<cv::Mat> textures_;  // the picture in grey levels, then ever narrower copies
+  std::vector<cv::Mat> textures_;  // the picture in float grey levels, then ever narrower copies
   cv::Ptr<cv::SIFT> sift_;
   cv::BFMatcher matcher_{cv::NORM_L2};
   std::vector<cv::Point3f> reference_points_;  // keypoints on the sign plane, metres, z = 0
@@ -127,7 +127,7 @@ class SignDetector : public MarkerDetector {
   cv::Matx33d last_plane_to_image_;        // ... and its aligned homography there (raw pixels)
   cv::Size frame_size_;                    // size of the frames seen since the last reset
   bool last_tracked_ = false;
-  RectifiedPatches patches_;  // through a lens: the rectified views ECC aligns on
+  RectifiedPatches patches_;  // through a lens: the rectified views the alignment works on
 };
 
 }  // namespace follow_bot

@@ -22,7 +22,7 @@ namespace {
 // unbiased.
 constexpr float kSiftOffsetPx = 0.25f;
 
-// Pixels along the sign's outline left out of the ECC alignment.
+// Pixels along the sign's outline left out of the alignment.
 constexpr int kEdgeBandPx = 4;
 
 // Larger signs are aligned on a block-averaged copy no wider or taller than this.
@@ -34,8 +34,13 @@ constexpr int kAlignMaxPx = 100;
 constexpr double kTextureStep = 1.189207115002721;  // 2^(1/4)
 constexpr int kMinTextureCols = 16;
 
-// ECC stops when its correlation coefficient changes by less than this between iterations.
-constexpr double kAlignEpsilon = 1e-6;
+// The alignment stops when a step moves no corner of the sign by this much (view pixels).
+constexpr double kAlignEpsilonPx = 1e-2;
+// Fraction of the Gauss-Newton step taken: whole steps overshot the far sign's tilt nearly
+// twofold, and it oscillated around the optimum instead of converging (measured on the
+// fronto-parallel sweep: +-0.025 px at the corners after 30 steps; with half steps they
+// settle below 0.01 px within 6).
+constexpr double kAlignStep = 0.5;
 
 // A sign last seen larger than this (its smaller side, pixels) is searched at half resolution.
 constexpr int kHalfResolutionSignPx = 150;
@@ -78,6 +83,79 @@ double signedArea(const std::vector<cv::Point2f>& polygon) {
     area += static_cast<double>(p.x) * q.y - static_cast<double>(q.x) * p.y;
   }
   return area / 2.0;
+}
+
+// Grey levels in double precision, smoothed by the 5x5 Gaussian that lets an alignment reach
+// from a pixel or two away.
+cv::Mat smoothed(const cv::Mat& gray) {
+  cv::Mat image;
+  gray.convertTo(image, CV_64F);
+  cv::GaussianBlur(image, image, cv::Size(5, 5), 0, 0);
+  return image;
+}
+
+// One Gauss-Newton step of the alignment of `camera` to `rendering` (both smoothed, same size)
+// over the pixels of `mask`: the homography S, view pixel to rendering pixel near the identity,
+// for which camera(p) = a rendering(S p) + b best, the gain a and offset b solved with it. Sets
+// `correlation` to the two images' correlation coefficient before the step; nothing when the
+// images do not correlate. cv::findTransformECC solves the same step in single precision on
+// raw pixel coordinates, where the tilt terms (scale x^2 ~ 1e4) make its 8 x 8 system too
+// ill-conditioned for floats: face-on from afar the tilt came out different with every SIMD
+// instruction set. Coordinates centred and scaled to [-1, 1], in doubles, it is well posed.
+std::optional<cv::Matx33d> alignmentStep(const cv::Mat& camera, const cv::Mat& rendering,
+                                         const cv::Mat& mask, double& correlation) {
+  constexpr int kUnknowns = 10;  // a, b, a times the 8 homography terms
+  const double cx = (rendering.cols - 1) / 2.0;
+  const double cy = (rendering.rows - 1) / 2.0;
+  const double scale = std::max(rendering.cols, rendering.rows) / 2.0;
+  cv::Matx<double, kUnknowns, kUnknowns> normal = cv::Matx<double, kUnknowns, kUnknowns>::zeros();
+  cv::Matx<double, kUnknowns, 1> projected = cv::Matx<double, kUnknowns, 1>::zeros();
+  double n = 0, sum_c = 0, sum_r = 0, sum_cc = 0, sum_rr = 0, sum_cr = 0;
+  for (int v = 1; v + 1 < rendering.rows; ++v) {
+    const double* r = rendering.ptr<double>(v);
+    const double* above = rendering.ptr<double>(v - 1);
+    const double* below = rendering.ptr<double>(v + 1);
+    const double* c = camera.ptr<double>(v);
+    const unsigned char* m = mask.ptr<unsigned char>(v);
+    const double y = (v - cy) / scale;
+    for (int u = 1; u + 1 < rendering.cols; ++u) {
+      if (!m[u]) continue;
+      const double x = (u - cx) / scale;
+      // Gradient per unit of the scaled coordinates.
+      const double gx = (r[u + 1] - r[u - 1]) / 2.0 * scale;
+      const double gy = (below[u] - above[u]) / 2.0 * scale;
+      const double perspective = -(gx * x + gy * y);
+      const double row[kUnknowns] = {r[u],   1.0,    gx * x, gx * y,          gx,
+                                     gy * x, gy * y, gy,     perspective * x, perspective * y};
+      for (int i = 0; i < kUnknowns; ++i) {
+        for (int j = i; j < kUnknowns; ++j) normal(i, j) += row[i] * row[j];
+        projected(i) += row[i] * c[u];
+      }
+      n += 1.0;
+      sum_c += c[u];
+      sum_r += r[u];
+      sum_cc += c[u] * c[u];
+      sum_rr += r[u] * r[u];
+      sum_cr += c[u] * r[u];
+    }
+  }
+  const double var_c = sum_cc - sum_c * sum_c / n;
+  const double var_r = sum_rr - sum_r * sum_r / n;
+  if (!(n >= kUnknowns && var_c > 0.0 && var_r > 0.0)) return std::nullopt;
+  correlation = (sum_cr - sum_c * sum_r / n) / std::sqrt(var_c * var_r);
+  for (int i = 0; i < kUnknowns; ++i) {
+    for (int j = 0; j < i; ++j) normal(i, j) = normal(j, i);
+  }
+  cv::Matx<double, kUnknowns, 1> solution;
+  if (!cv::solve(normal, projected, solution, cv::DECOMP_CHOLESKY)) return std::nullopt;
+  const double gain = solution(0);
+  if (!(gain > 0.0)) return std::nullopt;
+  // camera(p) = a rendering(p) + b + a grad . d(p): the terms of d are solution / a.
+  const cv::Matx<double, kUnknowns, 1> d = solution * (kAlignStep / gain);
+  const cv::Matx33d scaled(1.0 + d(2), d(3), d(4), d(5), 1.0 + d(6), d(7), d(8), d(9), 1.0);
+  const cv::Matx33d to_scaled(1.0 / scale, 0.0, -cx / scale, 0.0, 1.0 / scale, -cy / scale, 0.0,
+                              0.0, 1.0);
+  return to_scaled.inv() * scaled * to_scaled;
 }
 
 }  // namespace
@@ -137,12 +215,17 @@ SignDetector::SignDetector(const SignDetectorConfig& config) : config_(config) {
                                    (p.y + 0.5) * metres_per_px - height_m_ / 2.0, 0.0f);
   }
   sift_ = cv::SIFT::create(config.max_image_features);
-  for (double cols = reference.cols; cols >= kMinTextureCols; cols /= kTextureStep) {
+  // Rendered in floats: grey levels rounded to integers change with every small change of the
+  // homography, which kept the alignment's steps from settling below kAlignEpsilonPx (a tracked
+  // frame of the overload test's probe: 3.3 ms CPU rendered in integers, 2.3 in floats).
+  cv::Mat picture;
+  reference.convertTo(picture, CV_32F);
+  for (double cols = picture.cols; cols >= kMinTextureCols; cols /= kTextureStep) {
     const int c = static_cast<int>(std::lround(cols));
     const int rows =
         std::max(kMinTextureCols, static_cast<int>(std::lround(c * height_m_ / config.width_m)));
-    cv::Mat level = reference;
-    if (c < reference.cols) cv::resize(reference, level, cv::Size(c, rows), 0, 0, cv::INTER_AREA);
+    cv::Mat level = picture;
+    if (c < picture.cols) cv::resize(picture, level, cv::Size(c, rows), 0, 0, cv::INTER_AREA);
     textures_.push_back(level);
   }
 }
@@ -150,16 +233,16 @@ SignDetector::SignDetector(const SignDetectorConfig& config) : config_(config) {
 bool SignDetector::refineHomography(const cv::Mat& gray, const CameraGeometry& camera,
                                     int iterations, cv::Matx33d& plane_to_image) {
   // Render the sign as the camera would see it under the current homography (area-sampled like
-  // a sensor pixel), then align the camera image to that rendering with ECC. Aligning against a
-  // picture with the same perspective and blur everywhere is what makes the refinement unbiased:
-  // a fronto-parallel template biased oblique and far signs by up to 0.7 % of their range.
+  // a sensor pixel), then align the camera image to that rendering. Aligning against a picture
+  // with the same perspective and blur everywhere is what makes the refinement unbiased: a
+  // fronto-parallel template biased oblique and far signs by up to 0.7 % of their range.
   const std::vector<cv::Point2d> outline = outlinePlane();
   std::vector<cv::Point2d> before;
   cv::perspectiveTransform(outline, before, plane_to_image);
   cv::Rect roi = cv::boundingRect(std::vector<cv::Point2f>(before.begin(), before.end())) &
                  cv::Rect(0, 0, gray.cols, gray.rows);
   // A big sign is aligned on a block-averaged copy: its pose is well conditioned anyway, and
-  // ECC's cost grows with the pixel count.
+  // the alignment's cost grows with the pixel count.
   const int f = std::max(1, static_cast<int>(std::ceil(std::max(roi.width, roi.height) /
                                                        static_cast<double>(kAlignMaxPx))));
   roi.width -= roi.width % f;
@@ -174,7 +257,7 @@ bool SignDetector::refineHomography(const cv::Mat& gray, const CameraGeometry& c
   const double inv_f = 1.0 / f;
   const cv::Matx33d image_to_view(inv_f, 0.0, (0.5 - roi.x) * inv_f - 0.5, 0.0, inv_f,
                                   (0.5 - roi.y) * inv_f - 0.5, 0.0, 0.0, 1.0);
-  const cv::Matx33d plane_to_view = image_to_view * plane_to_image;
+  cv::Matx33d plane_to_view = image_to_view * plane_to_image;
 
   const double area = static_cast<double>(size.width) * size.height;
   const int ss = area <= 40000 ? 4 : area <= 160000 ? 2 : 1;  // supersampling of the rendering
@@ -191,12 +274,8 @@ bool SignDetector::refineHomography(const cv::Mat& gray, const CameraGeometry& c
   const cv::Matx33d texel_to_plane(mx, 0.0, 0.5 * mx - config_.width_m / 2, 0.0, my,
                                    0.5 * my - height_m_ / 2, 0.0, 0.0, 1.0);
   const cv::Matx33d view_to_fine(ss, 0.0, (ss - 1) / 2.0, 0.0, ss, (ss - 1) / 2.0, 0.0, 0.0, 1.0);
-  cv::Mat fine, rendered;
-  cv::warpPerspective(texture, fine, cv::Mat(view_to_fine * plane_to_view * texel_to_plane),
-                      size * ss, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-  cv::resize(fine, rendered, size, 0, 0, cv::INTER_AREA);
   // Only pixels well inside the sign count: within kEdgeBandPx of its outline the camera sees
-  // the sign blended with an unknown background (blurred further by ECC's 5x5 Gaussian).
+  // the sign blended with an unknown background (blurred further by the 5x5 smoothing).
   std::vector<cv::Point2d> outline_view;
   cv::perspectiveTransform(outline, outline_view, plane_to_view);
   std::vector<cv::Point> polygon;
@@ -207,26 +286,30 @@ bool SignDetector::refineHomography(const cv::Mat& gray, const CameraGeometry& c
   const cv::Size band(2 * kEdgeBandPx + 1, 2 * kEdgeBandPx + 1);
   cv::erode(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, band));
 
-  // ECC warp: camera view pixel -> rendering pixel, starting at the identity.
-  cv::Mat warp = cv::Mat::eye(3, 3, CV_32F);
+  const cv::Mat camera_smooth = smoothed(camera_view);
   double correlation = 0.0;
-  try {
-    correlation =
-        cv::findTransformECC(camera_view, rendered, warp, cv::MOTION_HOMOGRAPHY,
-                             cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS,
-                                              iterations, kAlignEpsilon),
-                             mask, 5);
-  } catch (const cv::Exception&) {
-    return false;  // ECC did not converge
+  for (int i = 0; i < iterations; ++i) {
+    cv::Mat fine, rendered;
+    cv::warpPerspective(texture, fine, cv::Mat(view_to_fine * plane_to_view * texel_to_plane),
+                        size * ss, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::resize(fine, rendered, size, 0, 0, cv::INTER_AREA);
+    // view_to_rendering: rendering(S p) = camera(p), and the rendering shows the picture through
+    // the current homography, so the camera sees it through S^-1 of it.
+    const std::optional<cv::Matx33d> view_to_rendering =
+        alignmentStep(camera_smooth, smoothed(rendered), mask, correlation);
+    if (!view_to_rendering) return false;
+    plane_to_view = view_to_rendering->inv() * plane_to_view;
+    plane_to_view *= 1.0 / plane_to_view(2, 2);
+    std::vector<cv::Point2d> corners_after;
+    cv::perspectiveTransform(outline_view, corners_after, *view_to_rendering);
+    double moved = 0.0;
+    for (size_t k = 0; k < corners_after.size(); ++k) {
+      moved = std::max(moved, cv::norm(corners_after[k] - outline_view[k]));
+    }
+    if (moved < kAlignEpsilonPx) break;
   }
   if (!(correlation >= config_.min_correlation)) return false;
-  cv::Mat warp64;
-  warp.convertTo(warp64, CV_64F);
-  // rendering(S p) = camera(p) with S = V^-1 W V (V: image to view), and the rendering shows the
-  // picture through H, so the camera sees it through S^-1 H.
-  const cv::Matx33d image_to_rendering =
-      image_to_view.inv() * cv::Matx33d(warp64.ptr<double>()) * image_to_view;
-  cv::Matx33d refined = image_to_rendering.inv() * plane_to_image;
+  cv::Matx33d refined = image_to_view.inv() * plane_to_view;
   refined *= 1.0 / refined(2, 2);
   std::vector<cv::Point2d> after;
   cv::perspectiveTransform(outline, after, refined);
@@ -420,7 +503,7 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
   // The pose is the rectified camera's: points of a raw frame go through the lens first.
   const std::vector<cv::Point2f> inlier_image = rectifyPixels(camera, matches.image);
 
-  // Pose points: a grid over the sign mapped by the ECC-refined homography, or else the inlier
+  // Pose points: a grid over the sign mapped by the aligned homography, or else the inlier
   // keypoints themselves. A second pass renders from the first pass's better homography. The
   // homography is the rectified camera's: through a lens, the one through the rectified inliers.
   cv::Matx33d plane_to_image = matches.plane_to_image;
