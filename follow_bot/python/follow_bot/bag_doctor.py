@@ -750,6 +750,7 @@ def fit_beacon_colours(samples, centres) -> dict | None:
 
 DETECTOR_PARAMS = ("h_min", "h_max", "s_min", "s_max", "v_min", "v_max", "band_distance",
                    "band_rows", "look_ahead", "look_ahead_distance", "min_pixels",
+                   "floor_margin", "floor_mads", "line_width", "line_width_factor",
                    "blob_chroma_fraction")  # fmt: skip
 STEERING_PARAMS = ("mode", "max_linear", "min_linear", "max_angular")
 PD_PARAMS = ("kp", "kd", "taper", "look_ahead_weight")
@@ -780,6 +781,10 @@ def detector_config_with(core, params: dict):
     config.look_ahead = core.BandConfig(distance_m=ahead, rows=rows)
     config.look_ahead_enabled = params.get("look_ahead", config.look_ahead_enabled)
     config.min_pixels = params.get("min_pixels", config.min_pixels)
+    config.floor_margin = params.get("floor_margin", config.floor_margin)
+    config.floor_mads = params.get("floor_mads", config.floor_mads)
+    config.line_width_m = params.get("line_width", config.line_width_m)
+    config.line_width_factor = params.get("line_width_factor", config.line_width_factor)
     config.blob_chroma_fraction = params.get("blob_chroma_fraction", config.blob_chroma_fraction)
     return config
 
