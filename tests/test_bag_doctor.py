@@ -3,10 +3,14 @@
 - A lap of the course rendered by the harness, written as a bag the way a robot records one
   (raw bgr8 frames, camera_info, tf_static, cmd_vel): the doctor's sighting in every frame against
   where the renderer's own centreline crosses the band (projected through the harness camera),
-  and the mounting it reads from tf_static against the world's.
+  and the mounting it reads from tf_static against the world's; clean, under the harness's
+  realistic profile and under its harsh one (one seed's draw, with its barrel lens).
 - The same lap under a colour cast the default band misses (blue-green light: the line's hue
   moves from 25 to ~42), as JPEG: --fit-colours raises the detection rate, and the fitted band
   finds the line where the renderer put it.
+- The beacons' drive toward a green ball under a growing glare the default s_min misses:
+  --behaviour beacons --fit-colours raises the detection rate, and the fitted thresholds find
+  the ball where the renderer put it.
 - The real raspicam bags (old "jpg" format, a topic without a leading slash), when present.
 - Under Debian's python3 without OpenCV, --help works and a run says what to install.
 """
@@ -16,6 +20,7 @@ import json
 import math
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +34,7 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from tf2_msgs.msg import TFMessage
 
 from follow_bot import bag_doctor, core
-from harness.realism import PROFILES, realism_from
+from harness.realism import PROFILES, barrel_distortion, realism_from
 from harness.render import Renderer
 from harness.world import WORLDS_DIR, load_world
 
@@ -38,6 +43,7 @@ RATE_HZ = 0.3 / STEP_M  # as a robot at 0.3 m/s
 OFFSET_M = 0.04  # the robot weaves this far either side of the line
 # A blue-green light: per-channel gains (B, G, R) on the rendered frames.
 CAST = np.array([1.0, 0.95, 0.55])
+HARSH_SEED = 1  # the harsh profile's draw: a run's seed
 
 
 def lap_poses(world):
@@ -61,8 +67,16 @@ def lap_poses(world):
 
 def band_truth(camera, centreline, pose, rows):
     """The normalised column (-1 left .. 1 right) where the centreline crosses the band's middle
-    row, or None when it does not cross it inside the image once."""
+    row (through the camera's lens), or None when it does not cross it inside the image once."""
     pixels, depth = camera.project(np.column_stack([centreline, np.zeros(len(centreline))]), pose)
+    if camera.distorted:
+        # Only rays within 1 of the optical axis (normalised): the barrel's polynomial folds
+        # back far outside the view, where it would put far points inside the image.
+        near = np.hypot(
+            (pixels[:, 0] - camera.cx) / camera.fx, (pixels[:, 1] - camera.cy) / camera.fy
+        )
+        depth = np.where(near < 1.0, depth, -1.0)
+        pixels = camera.distort_pixels(np.nan_to_num(pixels))
     row = (rows[0] + rows[1] - 1) / 2.0
     crossings = []
     for (u0, v0), (u1, v1), d0, d1 in zip(
@@ -86,7 +100,7 @@ def quaternion(r):
     return x, y, z, w
 
 
-def write_lap_bag(path, renderer, poses, cast=None, compressed=False):
+def write_lap_bag(path, renderer, poses, light=None, compressed=False):
     """The frames at `poses` as a robot's recording: camera frames (raw bgr8, or JPEG with
     the raspicam's "jpg" format string), camera_info, tf_static and the cmd_vel that drove
     the robot from pose to pose, and /odom saying it did."""
@@ -102,9 +116,14 @@ def write_lap_bag(path, renderer, poses, cast=None, compressed=False):
         bag.write("/tf_static", TFMessage([mount]), mount.header.stamp)
         for i, pose in enumerate(poses):
             stamp = rospy.Time.from_sec(1.0 + i / RATE_HZ)
-            frame = renderer.render(pose, frame=i)
-            if cast is not None:
-                frame = np.clip(frame * cast, 0, 255).astype(np.uint8)
+            nxt = poses[(i + 1) % len(poses)]
+            command = Twist()
+            command.linear.x = math.dist(pose[:2], nxt[:2]) * RATE_HZ
+            command.angular.z = math.remainder(nxt[2] - pose[2], math.tau) * RATE_HZ
+            # Blurred by that motion over the exposure (a realism's exposure_time).
+            frame = renderer.render(pose, frame=i, motion=(command.linear.x, command.angular.z))
+            if light is not None:  # (frame, index) -> the frame as another light shows it
+                frame = np.clip(light(frame, i), 0, 255).astype(np.uint8)
             if compressed:
                 msg = CompressedImage(format="jpg")
                 msg.data = cv2_jpeg(frame)
@@ -117,10 +136,6 @@ def write_lap_bag(path, renderer, poses, cast=None, compressed=False):
             info = CameraInfo(**{k: v for k, v in info_fields.items() if k != "frame_id"})
             info.header = msg.header
             bag.write("camera/rgb/camera_info", info, stamp)
-            nxt = poses[(i + 1) % len(poses)]
-            command = Twist()
-            command.linear.x = math.dist(pose[:2], nxt[:2]) * RATE_HZ
-            command.angular.z = math.remainder(nxt[2] - pose[2], math.tau) * RATE_HZ
             bag.write("/cmd_vel", command, stamp)
             odom = Odometry()
             odom.header.stamp, odom.twist.twist = stamp, command
@@ -136,13 +151,18 @@ def cv2_jpeg(frame):
 
 
 def make_lap(profile):
-    """The renderer (clean with noise, or the harness's realistic profile), the lap's poses and
-    each frame's truth (band_truth)."""
+    """The renderer (clean with noise, or a harness realism profile: harsh's ranges drawn from
+    HARSH_SEED, its barrel lens on the camera), the lap's poses and each frame's truth
+    (band_truth)."""
     world = load_world(WORLDS_DIR / "course.yaml")
-    if profile == "realistic":
-        renderer = Renderer(world, noise_sigma=0.0, realism=realism_from(PROFILES["realistic"]))
-    else:
+    if profile == "clean":
         renderer = Renderer(world, noise_sigma=3.0)
+    else:
+        seed = HARSH_SEED if profile == "harsh" else None  # None: the world's noise seed
+        realism = realism_from(PROFILES[profile], seed=seed or 0)
+        lens = barrel_distortion(realism.barrel) if realism.barrel else world.camera.distortion
+        camera = replace(world.camera, distortion=lens)
+        renderer = Renderer(world, camera, noise_sigma=0.0, realism=realism, seed=seed)
     poses = lap_poses(world)
     camera = renderer.camera
     geometry = core.CameraGeometry(
@@ -181,13 +201,31 @@ def compare(records, truth):
     return agree, np.array(errors)
 
 
-@pytest.mark.parametrize("profile", ["clean", "realistic"])
+# Per lap: frames the doctor may miss where the line crosses the band, and bounds on
+# |position - truth| over the frames both see (median, 95th percentile, largest), from the
+# measured figures in docs/results.md. The centroid of the band's pixels vs the centreline at
+# its middle row: a 5 cm line over 20 rows, within 2 % of the half width (6 px) on every frame
+# of the clean and realistic laps.
+LAP_BOUNDS = {
+    "clean": (2, 0.01, 0.02, 0.02),
+    "realistic": (2, 0.01, 0.02, 0.02),
+    # HARSH_SEED's draw: a bluish shadow band drifts along the line over frames 7-17; in it
+    # the floor test (floor_margin) rejects the line, a lit floor's yellowness in the band
+    # beside it (12 frames lost; found without the test, below). As a shadow's edge leaves
+    # the line, only its lit part counts (two frames off by 0.06-0.07, under a line width).
+    "harsh": (13, 0.01, 0.01, 0.1),
+}
+
+
+@pytest.mark.parametrize("profile", LAP_BOUNDS)
 def test_lap_report_matches_the_renderer(profile, tmp_path):
     # realistic: tiles, shadows, walls, yellow tape and a yellow box near the line, white
-    # balance and exposure drift, vignetting, motion blur, JPEG 60 (harness/realism.py).
+    # balance and exposure drift, vignetting, motion blur, JPEG 60 (harness/realism.py);
+    # harsh: all of them stronger, a wood floor near the line's hue, drifting tinted shadows
+    # and a barrel lens (the harness drops frames of a run too: a recording has none).
     renderer, poses, truth = make_lap(profile)
     bag = tmp_path / "lap.bag"
-    write_lap_bag(bag, renderer, poses, compressed=profile == "realistic")
+    write_lap_bag(bag, renderer, poses, compressed=profile != "clean")
     report, stdout = inspect(bag, tmp_path / "report", "--fit-colours")
     records = report["records"]
     assert report["frames"] == len(poses) == len(records)
@@ -201,13 +239,14 @@ def test_lap_report_matches_the_renderer(profile, tmp_path):
     agree, errors = compare(records, truth)
     print(f"lap, {profile}: {len(poses)} frames, line in the band {visible}, doctor found "
           f"{sum(r['found'] for r in records)}, agree {agree}, |position - truth| median "
-          f"{np.median(errors):.4f} max {errors.max():.4f}")  # fmt: skip
+          f"{np.median(errors):.4f} p95 {np.percentile(errors, 95):.4f} max "
+          f"{errors.max():.4f}")  # fmt: skip
+    missed, median, p95, largest = LAP_BOUNDS[profile]
     assert visible >= 0.9 * len(poses)
-    assert agree >= len(poses) - 2
-    assert report["detection_rate"] == pytest.approx(visible / len(poses), abs=2 / len(poses))
-    # The centroid of the band's pixels vs the centreline at its middle row: a 5 cm line over
-    # 20 rows, within 2 % of the half width (6 px) on every frame.
-    assert np.median(errors) < 0.01 and errors.max() < 0.02
+    assert agree >= len(poses) - missed
+    assert report["detection_rate"] == pytest.approx(visible / len(poses), abs=missed / len(poses))
+    assert np.median(errors) < median and np.percentile(errors, 95) < p95
+    assert errors.max() < largest
     # The bag's commands (the weave) against the core's: every frame after the first command.
     assert report["commands"]["frames_with_a_bag_command"] == len(poses) - 1
     assert report["applied_from"] == "/odom"
@@ -216,16 +255,25 @@ def test_lap_report_matches_the_renderer(profile, tmp_path):
         assert (tmp_path / "report" / name).stat().st_size > 10_000
     assert "detection rate" in stdout
     # The colours fitted to a lap the default band reads: no frame lost (a shadow band darkens
-    # the line in three of the realistic lap's frames: the value bound keeps them).
+    # the line in three of the realistic lap's frames: the value bound keeps them). The harsh
+    # lap's lost frames fail the floor test, not the band: the fit neither finds nor loses any.
     fit = report["fit"]
     print(f"fit: {fit['parameters']}, detection rate {fit['detection_rate_after']}")
     assert fit["detection_rate_after"] == report["detection_rate"] and fit["better"]
+    if profile == "harsh":
+        # Without the floor test (--params floor_margin: 0) the shadowed line is found; measured:
+        # 91 of 93 frames, 90 within 0.025 of the centreline (the last on another blob, 0.33).
+        (tmp_path / "no_floor_test.yaml").write_text("floor_margin: 0\n")
+        bare, _ = inspect(bag, tmp_path / "bare", "--params", tmp_path / "no_floor_test.yaml")
+        _, bare_errors = compare(bare["records"], truth)
+        assert bare["detection_rate"] >= 90 / len(poses)
+        assert (bare_errors < 0.03).sum() >= 89
 
 
 def test_fit_colours_finds_the_line_under_a_colour_cast(lap, tmp_path):
     renderer, poses, truth = lap
     bag = tmp_path / "cast.bag"
-    write_lap_bag(bag, renderer, poses, cast=CAST, compressed=True)
+    write_lap_bag(bag, renderer, poses, light=lambda frame, _: frame * CAST, compressed=True)
     report, stdout = inspect(bag, tmp_path / "report", "--fit-colours")
     fit = report["fit"]
     print(f"cast: detection rate {fit['detection_rate_before']} -> "
@@ -323,3 +371,57 @@ def test_help_and_missing_libraries_under_debian_python(tmp_path):
         pytest.skip("Debian's python3 has OpenCV and matplotlib: nothing is missing")
     run = subprocess.run([*script, str(tmp_path / "x.bag")], capture_output=True, text=True)
     assert run.returncode == 1 and "python3-opencv" in run.stderr
+
+
+# A veiling glare (a window ahead, a milky lens) over the beacons' drive: each frame mixed with
+# a light grey, more and more, from VEIL[0] to VEIL[1] of it. The green ball washes out below
+# the default s_min (100) after 13 of the 30 frames.
+VEIL = (0.4, 0.75)
+VEIL_GREY = 170.0
+
+
+def test_fit_colours_finds_the_beacons_in_a_glare(tmp_path):
+    world = load_world(WORLDS_DIR / "green_red.yaml")
+    renderer = Renderer(world, noise_sigma=3.0)
+    # Toward the green ball (4 m ahead) from 3 m off, weaving +-0.25 rad.
+    poses = [(x, 0.0, 0.25 * math.sin(x * 2.5)) for x in np.arange(0.0, 3.0, 0.1)]
+    veils = np.linspace(*VEIL, len(poses))
+    bag = tmp_path / "glare.bag"
+    write_lap_bag(
+        bag, renderer, poses, lambda frame, i: frame * (1 - veils[i]) + veils[i] * VEIL_GREY
+    )
+    # Truth: the green ball's silhouette centre (renderer), its whole silhouette in the frame.
+    camera, truth = renderer.camera, []
+    for pose in poses:
+        (green,) = (p for p in renderer.object_projections(pose) if p["name"] == "green")
+        centre = green.get("blob_centre_px")
+        radius = camera.fx * 0.2 / max(green["depth"], 1e-6)
+        inside = centre is not None and radius <= centre[0] < camera.width - radius
+        truth.append((centre[0] - camera.width / 2) / (camera.width / 2) if inside else None)
+    assert all(t is not None for t in truth)
+    report, stdout = inspect(bag, tmp_path / "report", "--behaviour", "beacons", "--fit-colours")
+    fit = report["fit"]
+    fitted_file = tmp_path / "report" / "fitted_params.yaml"
+    params = yaml.safe_load(fitted_file.read_text())
+    assert params == fit["parameters"] and set(params) == {"sensitivity", "s_min", "v_min"}
+    refit, _ = inspect(bag, tmp_path / "refit", "--behaviour", "beacons", "--params", fitted_file)
+    found, errors = compare(refit["records"], truth)
+    print(f"glare: detection rate {fit['detection_rate_before']} -> "
+          f"{fit['detection_rate_after']}, fitted {params}; |position - truth| median "
+          f"{np.median(errors):.4f} max {errors.max():.4f}")  # fmt: skip
+    # Measured: 13 -> 30 of 30 frames (sensitivity 5, s_min 39, v_min 141: the glare lifts
+    # every pixel's value).
+    assert fit["detection_rate_before"] < 0.5 and fit["better"]
+    assert fit["detection_rate_after"] >= 1 - 1.5 / len(poses)
+    assert refit["detection_rate"] == fit["detection_rate_after"]
+    # Every fitted sighting is the green ball, its centroid on the silhouette's centre.
+    assert found == sum(r["found"] for r in refit["records"])
+    assert np.median(errors) < 0.01 and errors.max() < 0.02
+    assert "->" in stdout
+    # beacon_chaser.launch takes the file as it is (params:=).
+    dump = subprocess.run(
+        ["roslaunch", "--dump-params", "follow_bot", "beacon_chaser.launch",
+         f"params:={fitted_file}", "robot_description:=false"],
+        capture_output=True, text=True, timeout=60, check=True,
+    )  # fmt: skip
+    assert yaml.safe_load(dump.stdout)["/beacon_chaser/s_min"] == params["s_min"]

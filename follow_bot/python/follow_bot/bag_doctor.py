@@ -12,8 +12,8 @@ detector and controller the node runs (follow_bot.core), then DIR gets:
   and its mask;
 - report.json: the figures (frames, detection rate, lost spans, jumps, commands, per-frame
   records);
-- with --fit-colours (follower): fitted_params.yaml, a colour band fitted to the bag, with the
-  detection rate before and after (printed, and in report.json).
+- with --fit-colours (follower, beacons): fitted_params.yaml, the colour thresholds fitted to
+  the bag, with the detection rate before and after (printed, and in report.json).
 """
 
 from __future__ import annotations
@@ -39,12 +39,19 @@ MISSING_LIBRARIES = (
     "that has them"
 )
 BEHAVIOURS = ("follower", "beacons", "parker")
+# The node a behaviour's fitted_params.yaml is for, and what the fit sets.
+NODES = {"follower": ("follower", "colour band"), "beacons": ("beacon_chaser", "colour thresholds")}
 IMAGE_TYPES = ("sensor_msgs/Image", "sensor_msgs/CompressedImage")
 TWIST_TYPES = ("geometry_msgs/Twist", "geometry_msgs/TwistStamped")
 # Frames shown on the contact sheet by default.
 SHEET_FRAMES = 12
 # A sighting this confident (core.BandMeasurement.confidence) seeds the colour fit.
 CONFIDENT = 0.8
+# A beacon seeds the colour fit when its circle is this large (px radius): its inner part
+# (BALL_INNER of the radius) is the ball's colour, beyond BALL_OUTER the background.
+CONFIDENT_RADIUS = 8
+BALL_INNER, BALL_OUTER = 0.8, 1.5
+SUBSAMPLE = 4  # every 4th pixel of a beacon frame's rows and columns goes into the fit
 # Frames whose band rows are kept for the colour fit (evenly spread over the bag).
 FIT_SAMPLES = 300
 # The line's hue spread in the fit: pixels this far (OpenCV hue) from the histogram's peak.
@@ -55,6 +62,7 @@ LINE_KEPT = 0.8  # the fraction of the line's pixels in each frame the value bou
 MIN_LINE_PIXELS = (
     30  # line pixels in a sampled band for it to bound the fit (the min_pixels default)
 )
+HUE_COUNT = 180  # OpenCV hue
 
 
 @dataclass
@@ -216,6 +224,17 @@ class FollowerReplay:
     def mask(self, frame, seen):
         return self.detector.debug_mask(frame)
 
+    def sample(self, frame, seen):
+        """The band's rows and, in a confident sighting, the line's pixels in them."""
+        band = seen.band
+        rows = slice(band.row_begin, band.row_end)
+        confident = band.found and band.confidence >= CONFIDENT
+        return frame[rows].copy(), self.detector.debug_mask(frame)[rows] if confident else None
+
+    @staticmethod
+    def fit(samples):
+        return fit_line_colours(samples)
+
 
 class BeaconsReplay:
     """The beacon chaser's step: ColourBlobDetector, BeaconController (position: the followed
@@ -223,9 +242,10 @@ class BeaconsReplay:
 
     name = "beacons"
 
-    def __init__(self, core, camera):
+    def __init__(self, core, camera, detector_config=None):
         self.core, self.camera = core, camera
-        self.detector = core.ColourBlobDetector()
+        self.config = detector_config or core.ColourBlobConfig()
+        self.detector = core.ColourBlobDetector(self.config)
         self.controller = core.BeaconController(core.BeaconControllerConfig(camera=camera))
         self.follow = self.controller.config.follow_colour
 
@@ -268,6 +288,32 @@ class BeaconsReplay:
     def mask(self, frame, result):
         masks = [self.detector.mask(frame, b.name) for b in result.colours]
         return np.maximum.reduce(masks) if masks else np.zeros(frame.shape[:2], np.uint8)
+
+    def sample(self, frame, result):
+        """The frame (every SUBSAMPLE-th pixel) and a mask of it: 255 inside the circles of
+        the beacons found large enough, 0 for the background, 128 near a found blob (its rim,
+        its shading: neither). None without a confident beacon."""
+        mask = np.zeros(frame.shape[:2], np.uint8)
+        confident = False
+        for blob in result.colours:
+            if not blob.found:
+                continue
+            centre = tuple(int(round(c)) for c in blob.circle_centre)
+            radius = blob.circle_radius
+            if radius >= CONFIDENT_RADIUS:
+                cv2.circle(mask, centre, int(BALL_OUTER * radius), 128, -1)
+                cv2.circle(mask, centre, int(BALL_INNER * radius), 255, -1)
+                confident = True
+            else:
+                x, y, w, h = (int(v) for v in blob.bounding_box)
+                cv2.rectangle(
+                    mask, (x - w // 2, y - h // 2), (x + w + w // 2, y + h + h // 2), 128, -1
+                )
+        step = slice(None, None, SUBSAMPLE)
+        return frame[step, step].copy(), mask[step, step] if confident else None
+
+    def fit(self, samples):
+        return fit_beacon_colours(samples, [spec.hue_centre for spec in self.config.colours])
 
 
 class ParkerReplay:
@@ -313,7 +359,8 @@ class ParkerReplay:
 class Replay:
     records: list[dict] = field(default_factory=list)
     kept: dict[int, tuple[np.ndarray, object]] = field(default_factory=dict)  # frame, result
-    samples: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)  # band, its mask
+    # Pixels for the colour fit and the mask of the target's among them (None: no confident one).
+    samples: list[tuple[np.ndarray, np.ndarray | None]] = field(default_factory=list)
     decode_errors: dict[str, int] = field(default_factory=dict)
 
 
@@ -339,7 +386,7 @@ def camera_from(core, info, shape, mounting):
 def replay(core, bag_path, topics, make_behaviour, keep=(), sample_every=0):
     """Plays the bag's frames through make_behaviour(camera) (made at the first frame), with the
     bag's odometry (else its commands) as what the robot did between frames, as the node. Keeps
-    the frames whose index is in `keep`; every `sample_every`-th frame's band rows (follower).
+    the frames whose index is in `keep`; every `sample_every`-th frame's behaviour.sample().
     Returns the Replay and the behaviour."""
     import rosbag
 
@@ -382,12 +429,8 @@ def replay(core, bag_path, topics, make_behaviour, keep=(), sample_every=0):
             out.records.append(record)
             if index in keep:
                 out.kept[index] = (frame, result)
-            if sample_every and index % sample_every == 0 and isinstance(behaviour, FollowerReplay):
-                band = result.band
-                rows = slice(band.row_begin, band.row_end)
-                mask = behaviour.detector.debug_mask(frame)[rows]
-                confident = band.found and band.confidence >= CONFIDENT
-                out.samples.append((frame[rows].copy(), mask if confident else None))
+            if sample_every and index % sample_every == 0:
+                out.samples.append(behaviour.sample(frame, result))
     if behaviour is None:
         raise ValueError(f"no frame of {topics.image} could be decoded: {out.decode_errors}")
     return out, behaviour
@@ -584,21 +627,32 @@ def contact_sheet(path, behaviour, kept, chosen, records, columns=2):
 # ---- the colour fit ----------------------------------------------------------------------------
 
 
+def hue_distance(hues, centres) -> np.ndarray:
+    """Each hue's distance (OpenCV hue, around the circle) to the nearest of `centres`."""
+    offsets = hues.astype(int)[:, None] - np.asarray(centres)[None, :]
+    return np.abs((offsets + HUE_COUNT // 2) % HUE_COUNT - HUE_COUNT // 2).min(axis=1)
+
+
+def colour_outliers(pixels) -> tuple[np.ndarray, np.ndarray]:
+    """The HSV pixels (Nx3) of a BGR image and which stand out of its colour: Otsu on the a*b*
+    distance from the image's median colour."""
+    hsv = cv2.cvtColor(pixels, cv2.COLOR_BGR2HSV).reshape(-1, 3)
+    lab = cv2.cvtColor(pixels, cv2.COLOR_BGR2LAB).reshape(-1, 3).astype(np.float32)
+    distance = np.linalg.norm(lab[:, 1:] - np.median(lab[:, 1:], axis=0), axis=1)
+    scaled = np.clip(distance * 4.0, 0, 255).astype(np.uint8)  # a*b* units of 1/4
+    threshold, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    # An image with no colour outlier at all (a grey floor only): Otsu splits noise; a line's
+    # paint or a ball stands at least 8 a*b* units off the floor.
+    return hsv, scaled > max(threshold, 32)
+
+
 def line_and_floor_pixels(samples) -> tuple[list[np.ndarray], np.ndarray]:
     """HSV pixels of the line (Nx3 per sampled band) and of the floor (Nx3, all bands). The
-    line: pixels the
-    default band finds in confident frames, and in every frame the band's colour outliers (Otsu
-    on the a*b* distance from the band's median colour) near the outliers' hue histogram peak."""
+    line: pixels the default band finds in confident frames, and in every frame the band's
+    colour outliers (colour_outliers) near the outliers' hue histogram peak."""
     outliers_hsv, line, floor = [], [], []
     for band, mask in samples:
-        hsv = cv2.cvtColor(band, cv2.COLOR_BGR2HSV).reshape(-1, 3)
-        lab = cv2.cvtColor(band, cv2.COLOR_BGR2LAB).reshape(-1, 3).astype(np.float32)
-        distance = np.linalg.norm(lab[:, 1:] - np.median(lab[:, 1:], axis=0), axis=1)
-        scaled = np.clip(distance * 4.0, 0, 255).astype(np.uint8)  # a*b* units of 1/4
-        threshold, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-        # A band with no colour outlier at all (a grey floor only): Otsu splits noise; a line's
-        # paint stands at least 8 a*b* units off the floor.
-        outlier = scaled > max(threshold, 32)
+        hsv, outlier = colour_outliers(band)
         confident = mask.reshape(-1) > 0 if mask is not None else np.zeros(len(hsv), bool)
         outliers_hsv.append((hsv, outlier, confident))
     candidates = np.vstack([h[o] for h, o, _ in outliers_hsv]) if outliers_hsv else np.empty((0, 3))
@@ -608,8 +662,7 @@ def line_and_floor_pixels(samples) -> tuple[list[np.ndarray], np.ndarray]:
     histogram = np.convolve(np.r_[histogram[-2:], histogram, histogram[:2]], np.ones(5), "valid")
     peak = int(np.argmax(histogram))
     for hsv, outlier, confident in outliers_hsv:
-        hue_distance = np.abs(((hsv[:, 0].astype(int) - peak) + 90) % 180 - 90)
-        is_line = confident | (outlier & (hue_distance <= HUE_WINDOW))
+        is_line = confident | (outlier & (hue_distance(hsv[:, 0], [peak]) <= HUE_WINDOW))
         line.append(hsv[is_line])
         floor.append(hsv[~is_line & ~outlier])
     return line, np.vstack(floor)
@@ -629,10 +682,25 @@ def lower_threshold(line_values, floor_values, highest: int = 255) -> int:
 
 
 def kept_in_every_frame(per_frame, channel) -> int:
-    """The highest lower bound on `channel` that keeps LINE_KEPT of the line's pixels in every
-    sampled band with a line: a line in a shadow in a few frames is still the line."""
+    """The highest lower bound on `channel` that keeps LINE_KEPT of the target's pixels in every
+    sampled frame with a target: a line or ball in a shadow in a few frames is still one."""
     frames = [f[:, channel] for f in per_frame if len(f) >= MIN_LINE_PIXELS]
     return int(min((np.percentile(f, 100 * (1 - LINE_KEPT)) for f in frames), default=255))
+
+
+def saturation_and_value_floors(per_frame, background) -> tuple[int, int]:
+    """s_min and v_min splitting the target's HSV pixels (Nx3 per sampled frame) from the
+    background's of the target's hue. Saturation: the split alone (paint keeps its saturation
+    in a shadow, and a white line a cast tints is among the outliers, low in saturation);
+    value: no higher than what keeps the target in every frame (a shadowed one is darker)."""
+    target = np.vstack(per_frame)
+    s_min = lower_threshold(target[:, 1], background[:, 1])
+    saturated = [f[f[:, 1] >= s_min] for f in per_frame]
+    v_highest = kept_in_every_frame(saturated, 2)
+    in_box = background[:, 1] >= s_min
+    return s_min, lower_threshold(
+        target[target[:, 1] >= s_min, 2], background[in_box, 2], v_highest
+    )
 
 
 def fit_line_colours(samples) -> dict | None:
@@ -645,25 +713,54 @@ def fit_line_colours(samples) -> dict | None:
     h_min, h_max = np.percentile(line[:, 0], [1, 99])
     h_min, h_max = max(0, int(h_min) - HUE_MARGIN), min(179, int(math.ceil(h_max)) + HUE_MARGIN)
     in_hue = (floor[:, 0] >= h_min) & (floor[:, 0] <= h_max)
-    # Saturation: the split alone (paint keeps its saturation in a shadow, and a white line a
-    # cast tints is among the outliers, low in saturation); value: no higher than what keeps the
-    # line in every frame (a shadowed line is darker).
-    s_min = lower_threshold(line[:, 1], floor[in_hue, 1])
-    in_box = in_hue & (floor[:, 1] >= s_min)
-    saturated = [f[f[:, 1] >= s_min] for f in per_frame]
-    v_highest = kept_in_every_frame(saturated, 2)
-    v_min = lower_threshold(line[line[:, 1] >= s_min, 2], floor[in_box, 2], v_highest)
+    s_min, v_min = saturation_and_value_floors(per_frame, floor[in_hue])
     return {
         "h_min": h_min, "h_max": h_max, "s_min": s_min, "s_max": 255, "v_min": v_min, "v_max": 255,
     }  # fmt: skip
 
 
+def fit_beacon_colours(samples, centres) -> dict | None:
+    """sensitivity, s_min, v_min (cfg/BeaconChaser.cfg's names, shared by every colour) fitted
+    to the sampled frames, or None without a beacon found confidently. The hue half-width
+    covers the hues of the confident beacons (the insides of their circles) around their
+    colours' centres, short of the next colour's window; the beacons' pixels are theirs and,
+    in every frame, the colour outliers (colour_outliers) in that window: a ball the default
+    thresholds miss still stands out of the room's colour."""
+    labelled = []
+    for pixels, mask in samples:
+        hsv, outlier = colour_outliers(pixels)
+        labels = mask.reshape(-1) if mask is not None else np.zeros(len(hsv), np.uint8)
+        labelled.append((hsv, outlier, labels))
+    seeds = [hsv[labels == 255] for hsv, _, labels in labelled]
+    if sum(len(f) >= MIN_LINE_PIXELS for f in seeds) == 0:
+        return None
+    pairs = itertools.combinations(centres, 2)
+    gap = min((hue_distance(np.array([a]), [b])[0] for a, b in pairs), default=HUE_COUNT)
+    spread = int(math.ceil(np.percentile(hue_distance(np.vstack(seeds)[:, 0], centres), 99)))
+    sensitivity = min(spread + HUE_MARGIN, (gap - 1) // 2)
+    per_frame, background = [], []
+    for hsv, outlier, labels in labelled:
+        in_hue = hue_distance(hsv[:, 0], centres) <= sensitivity
+        is_beacon = (labels == 255) | (outlier & in_hue & (labels == 0))
+        per_frame.append(hsv[is_beacon])
+        background.append(hsv[~is_beacon & ~outlier & in_hue & (labels == 0)])
+    s_min, v_min = saturation_and_value_floors(per_frame, np.vstack(background))
+    return {"sensitivity": sensitivity, "s_min": s_min, "v_min": v_min}
+
+
 DETECTOR_PARAMS = ("h_min", "h_max", "s_min", "s_max", "v_min", "v_max", "band_distance",
                    "band_rows", "look_ahead", "look_ahead_distance", "min_pixels",
+                   "floor_margin", "floor_mads", "line_width", "line_width_factor",
                    "blob_chroma_fraction")  # fmt: skip
 STEERING_PARAMS = ("mode", "max_linear", "min_linear", "max_angular")
 PD_PARAMS = ("kp", "kd", "taper", "look_ahead_weight")
 PATH_PARAMS = ("heading_gain", "lateral_gain")
+COLOUR_PARAMS = ("sensitivity", "s_min", "v_min")  # the beacon chaser's, every colour's
+BEACON_PARAMS = (*COLOUR_PARAMS, "min_area", "roundness_tolerance")
+KNOWN_PARAMS = {
+    "follower": {*DETECTOR_PARAMS, *STEERING_PARAMS, *PD_PARAMS, *PATH_PARAMS, "search_rate"},
+    "beacons": set(BEACON_PARAMS),
+}
 
 
 def detector_config_with(core, params: dict):
@@ -684,7 +781,25 @@ def detector_config_with(core, params: dict):
     config.look_ahead = core.BandConfig(distance_m=ahead, rows=rows)
     config.look_ahead_enabled = params.get("look_ahead", config.look_ahead_enabled)
     config.min_pixels = params.get("min_pixels", config.min_pixels)
+    config.floor_margin = params.get("floor_margin", config.floor_margin)
+    config.floor_mads = params.get("floor_mads", config.floor_mads)
+    config.line_width_m = params.get("line_width", config.line_width_m)
+    config.line_width_factor = params.get("line_width_factor", config.line_width_factor)
     config.blob_chroma_fraction = params.get("blob_chroma_fraction", config.blob_chroma_fraction)
+    return config
+
+
+def beacon_config_with(core, params: dict):
+    """core.ColourBlobConfig of beacon chaser ~params (cfg/BeaconChaser.cfg names; missing:
+    default), as the beacon chaser nodelet maps them to its detector."""
+    config = core.ColourBlobConfig()
+    colours = config.colours
+    for spec in colours:
+        for name in COLOUR_PARAMS:
+            setattr(spec, name, params.get(name, getattr(spec, name)))
+    config.colours = colours
+    config.min_area = params.get("min_area", config.min_area)
+    config.roundness_tolerance = params.get("roundness_tolerance", config.roundness_tolerance)
     return config
 
 
@@ -707,20 +822,21 @@ def steering_config_with(core, params: dict):
     return config
 
 
-def load_params(path) -> dict:
-    """The follower ~params in a YAML file (unknown names: ValueError naming them)."""
+def load_params(path, behaviour="follower") -> dict:
+    """The behaviour's ~params in a YAML file (unknown names: ValueError naming them)."""
     import yaml
 
     params = yaml.safe_load(Path(path).read_text()) or {}
-    known = {*DETECTOR_PARAMS, *STEERING_PARAMS, *PD_PARAMS, *PATH_PARAMS, "search_rate"}
-    unknown = sorted(set(params) - known)
+    if behaviour not in KNOWN_PARAMS:
+        raise ValueError(f"--params: the {behaviour} replay takes none")
+    unknown = sorted(set(params) - KNOWN_PARAMS[behaviour])
     if unknown:
-        raise ValueError(f"{path}: not follower parameters: {', '.join(unknown)}")
+        raise ValueError(f"{path}: not {behaviour} parameters: {', '.join(unknown)}")
     return params
 
 
 def write_params(path, fitted: dict, comment: str):
-    """A YAML of ~params for `rosparam load FILE /follower` or follower.launch's params:=FILE."""
+    """A YAML of ~params for `rosparam load FILE /NODE` or the node's launch params:=FILE."""
     lines = [f"# {line}" for line in comment.splitlines()]
     lines += [f"{name}: {value}" for name, value in fitted.items()]
     Path(path).write_text("\n".join(lines) + "\n")
@@ -742,13 +858,14 @@ def parse_args(argv):
     parser.add_argument(
         "--fit-colours",
         action="store_true",
-        help="fit the line's colour band to the bag (follower) and write " "fitted_params.yaml",
+        help="fit the colour thresholds to the bag (follower: the line's band; beacons: "
+        "sensitivity, s_min, v_min) and write fitted_params.yaml",
     )
     parser.add_argument(
         "--params",
         type=Path,
-        help="a YAML of the follower's ~params (cfg/Follower.cfg names, e.g. a fitted_params.yaml) "
-        "to replay with instead of the defaults",
+        help="a YAML of the behaviour's ~params (cfg/Follower.cfg or cfg/BeaconChaser.cfg "
+        "names, e.g. a fitted_params.yaml) to replay with instead of the defaults",
     )
     parser.add_argument("--image-topic", help="default: the bag's busiest image topic")
     parser.add_argument("--cmd-vel-topic", help="default: the bag's busiest Twist topic")
@@ -790,7 +907,7 @@ def bag_mounting(bag_path, topics, args):
 
 
 def make_replay(core, behaviour, mounting, params=None):
-    """make_behaviour(camera_info, frame shape) for replay(); `params`: follower ~params."""
+    """make_behaviour(camera_info, frame shape) for replay(); `params`: the behaviour's ~params."""
 
     def make(info, shape):
         camera = camera_from(core, info, shape, mounting)
@@ -800,7 +917,7 @@ def make_replay(core, behaviour, mounting, params=None):
                 steering_config_with(core, params or {}),
             )  # fmt: skip
         if behaviour == "beacons":
-            return BeaconsReplay(core, camera)
+            return BeaconsReplay(core, camera, beacon_config_with(core, params or {}))
         return ParkerReplay(core, camera)
 
     return make
@@ -817,9 +934,9 @@ def inspect(bag_path, out, behaviour="follower", fit_colours=False, args=None) -
     with rosbag.Bag(str(bag_path)) as bag:
         topics = pick_topics(bag, args.image_topic, args.cmd_vel_topic)
     mounting, mounting_source = bag_mounting(bag_path, topics, args)
-    params = load_params(args.params) if args.params else {}
-    if params and behaviour != "follower":
-        raise ValueError("--params are the follower's")
+    params = load_params(args.params, behaviour) if args.params else {}
+    if fit_colours and behaviour not in KNOWN_PARAMS:
+        raise ValueError("--fit-colours fits the follower's line band or the beacons' colours")
     sample_every = max(1, math.ceil(topics.frames / FIT_SAMPLES)) if fit_colours else 0
     first, replayed = replay(
         core, bag_path, topics, make_replay(core, behaviour, mounting, params), (), sample_every
@@ -849,33 +966,38 @@ def inspect(bag_path, out, behaviour="follower", fit_colours=False, args=None) -
     }
     fitted_records = None
     if fit_colours:
-        if behaviour != "follower":
-            raise ValueError("--fit-colours fits the follower's line band only")
-        fitted = fit_line_colours(first.samples)
+        fitted = replayed.fit(first.samples)
         fit = {
             "sampled_frames": len(first.samples),
             "detection_rate_before": figures["detection_rate"],
         }
         if fitted is None:
-            fit["error"] = "no line-coloured pixels stand out of the floor in the band"
+            fit["error"] = (
+                "no line-coloured pixels stand out of the floor in the band"
+                if behaviour == "follower"
+                else "no beacon found confidently (a circle of radius "
+                f"{CONFIDENT_RADIUS} px or more) to fit to"
+            )
         else:
             after, _ = replay(
                 core, bag_path, topics, make_replay(core, behaviour, mounting, {**params, **fitted})
             )
             fitted_records = after.records
-            rate = sum(r["found"] for r in after.records) / len(after.records)
+            found_after = sum(r["found"] for r in after.records)
+            rate = found_after / len(after.records)
             fit.update(parameters=fitted, detection_rate_after=round(rate, 4))
-            # A band that finds the line in fewer frames than the one replayed is no advice.
-            fit["better"] = rate >= figures["detection_rate"]
+            # Thresholds that find the target in fewer frames than the ones replayed are no advice.
+            fit["better"] = found_after >= sum(r["found"] for r in first.records)
             fit["file"] = str(out / "fitted_params.yaml")
+            node, what = NODES[behaviour]
             write_params(
                 fit["file"],
                 fitted,
                 (
-                    "The follower's colour band, fitted by `inspect --fit-colours` to\n"
+                    f"The {node}'s {what}, fitted by `inspect --fit-colours` to\n"
                     f"{bag_path.name} ({len(first.records)} frames): detection rate "
                     f"{fit['detection_rate_before']:.3f} before, {rate:.3f} after.\n"
-                    f"Load: rosparam load {Path(fit['file']).name} /follower, or follower.launch "
+                    f"Load: rosparam load {Path(fit['file']).name} /{node}, or {node}.launch "
                     f"params:={Path(fit['file']).name}"
                 ),
             )
