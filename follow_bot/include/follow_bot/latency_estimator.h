@@ -64,6 +64,8 @@ class LatencyEstimator {
     Twist2D twist;
   };
 
+  // The command held at t; t must not precede the first command kept.
+  const Command& heldAt(double t) const;
   // Integral of the held commands up to t; t must not precede the first command kept.
   Twist2D integralAt(double t) const;
   // The commands' mean over [t - span, t] (their value at t when span is 0).

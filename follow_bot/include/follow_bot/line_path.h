@@ -62,6 +62,10 @@
 
 namespace follow_bot {
 
+// The displacement over the exact arc of `distance` m turning `turn` rad, in the frame at its
+// start (x forward, y left).
+cv::Point2d arcDisplacement(double distance, double turn);
+
 // Uses config.path, the limits and min_confidence; its fallback is a PdLaw on the same config.
 // Speed: linear = max_linear, lowered (not below min_linear) so that |linear * c| <=
 // max_angular: on a sharp curve or a big correction the robot slows down and still drives the

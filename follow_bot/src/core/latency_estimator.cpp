@@ -82,22 +82,21 @@ void LatencyEstimator::measured(double stamp, const Twist2D& twist) {
   odometry_.push_back(Odometry{stamp, span <= kMaxOdometrySpan ? span : 0.0, twist});
 }
 
-Twist2D LatencyEstimator::integralAt(double t) const {
+const LatencyEstimator::Command& LatencyEstimator::heldAt(double t) const {
   const auto after = std::upper_bound(commands_.begin(), commands_.end(), t,
                                       [](double time, const Command& c) { return time < c.stamp; });
-  const Command& held = *std::prev(after);
+  return *std::prev(after);
+}
+
+Twist2D LatencyEstimator::integralAt(double t) const {
+  const Command& held = heldAt(t);
   const double dt = t - held.stamp;
   return {held.integral.linear + held.twist.linear * dt,
           held.integral.angular + held.twist.angular * dt};
 }
 
 Twist2D LatencyEstimator::meanOver(double t, double span) const {
-  if (span <= 0.0) {
-    const auto after =
-        std::upper_bound(commands_.begin(), commands_.end(), t,
-                         [](double time, const Command& c) { return time < c.stamp; });
-    return std::prev(after)->twist;
-  }
+  if (span <= 0.0) return heldAt(t).twist;
   const Twist2D end = integralAt(t);
   const Twist2D begin = integralAt(t - span);
   return {(end.linear - begin.linear) / span, (end.angular - begin.angular) / span};

@@ -14,15 +14,6 @@ constexpr double kSmallTurnRad = 1e-6;
 
 bool isFinite(const cv::Point2d& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 
-// The displacement over the exact arc of `distance` m turning `turn` rad, in the frame at its
-// start.
-cv::Point2d arcDisplacement(double distance, double turn) {
-  if (std::abs(turn) < kSmallTurnRad) {
-    return cv::Point2d(distance * (1.0 - turn * turn / 6.0), distance * turn / 2.0);
-  }
-  return cv::Point2d(distance * std::sin(turn) / turn, distance * (1.0 - std::cos(turn)) / turn);
-}
-
 cv::Point2d rotated(const cv::Point2d& d, double angle) {
   const double c = std::cos(angle), s = std::sin(angle);
   return cv::Point2d(c * d.x - s * d.y, s * d.x + c * d.y);
@@ -366,6 +357,13 @@ void PathLaw::reset() {
 }
 
 LineState PathLaw::state() const { return following_ ? LineState::kFollowing : fallback_.state(); }
+
+cv::Point2d arcDisplacement(double distance, double turn) {
+  if (std::abs(turn) < kSmallTurnRad) {
+    return cv::Point2d(distance * (1.0 - turn * turn / 6.0), distance * turn / 2.0);
+  }
+  return cv::Point2d(distance * std::sin(turn) / turn, distance * (1.0 - std::cos(turn)) / turn);
+}
 
 std::vector<cv::Point2d> PathLaw::pathPoints() const {
   std::vector<cv::Point2d> positions;

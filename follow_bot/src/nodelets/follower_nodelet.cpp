@@ -29,13 +29,7 @@ namespace {
 std::vector<cv::Point2d> predictedArc(const Twist2D& command, double horizon_s, double step_s) {
   std::vector<cv::Point2d> arc;
   for (double t = 0.0; t <= horizon_s + 1e-9; t += step_s) {
-    const double heading = command.angular * t;
-    const double along = command.linear * t;
-    // The exact arc; a straight line while the turn is negligible.
-    arc.push_back(std::abs(command.angular) < 1e-6
-                      ? cv::Point2d(along, 0.0)
-                      : cv::Point2d(std::sin(heading), 1.0 - std::cos(heading)) *
-                            (command.linear / command.angular));
+    arc.push_back(arcDisplacement(command.linear * t, command.angular * t));
   }
   return arc;
 }
