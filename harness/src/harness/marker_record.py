@@ -12,13 +12,12 @@ constant's name, e.g. SPHERE, ARROW, LINE_STRIP), "position", "points", "scale",
 from __future__ import annotations
 
 import json
-import time
 from pathlib import Path
 
 import genpy.dynamic
 import rospy
 
-from harness.sim_node import CLOCK_PREROLL_S
+from harness.sim_node import CLOCK_PREROLL_S, find_topic
 
 TOPIC_TYPE = "visualization_msgs/MarkerArray"
 TOPIC_WAIT_S = 60.0  # wall s for the behaviour to advertise its markers
@@ -63,27 +62,15 @@ class MarkerDecoder:
         }
 
 
-def find_marker_topic(timeout: float) -> str:
-    """The one MarkerArray topic published in this node's namespace (waits up to `timeout`)."""
-    deadline = time.monotonic() + timeout
-    while not rospy.is_shutdown() and time.monotonic() < deadline:
-        topics = [name for name, kind in rospy.get_published_topics(rospy.get_namespace())
-                  if kind == TOPIC_TYPE]  # fmt: skip
-        if len(topics) > 1:
-            raise ValueError(f"several marker topics {topics}")
-        if topics:
-            return topics[0]
-        time.sleep(0.1)
-    raise ValueError(f"no {TOPIC_TYPE} topic within {timeout:g} s")
-
-
 def main() -> None:
     rospy.init_node("marker_record")
     out = Path(rospy.get_param("~out"))
     frames: list[dict] = []
     rospy.on_shutdown(lambda: out.write_text(json.dumps(frames)))
     decoder = MarkerDecoder()
-    topic = find_marker_topic(TOPIC_WAIT_S)
+    topic = find_topic(TOPIC_TYPE, TOPIC_WAIT_S)
+    if not topic:
+        raise ValueError(f"no {TOPIC_TYPE} topic within {TOPIC_WAIT_S:g} s")
     rospy.Subscriber(topic, rospy.AnyMsg, lambda raw: frames.append(decoder.frame(raw)),
                      queue_size=100)  # fmt: skip
     rospy.spin()

@@ -121,14 +121,15 @@ class CommandInbox:
             return self._cond.wait_for(lambda: self._statuses > 0, timeout)
 
 
-def find_status_topic(timeout: float) -> str:
-    """The one topic of type BehaviourStatus in this node's namespace (waits up to `timeout` s)."""
+def find_topic(topic_type: str, timeout: float) -> str:
+    """The one topic of `topic_type` in this node's namespace (waits up to `timeout` s); "" when
+    there is none by then. ValueError when there are several (the caller names the one)."""
     deadline = time.monotonic() + timeout
     while not rospy.is_shutdown():
         topics = [name for name, kind in rospy.get_published_topics(rospy.get_namespace())
-                  if kind == BehaviourStatus._type]  # fmt: skip
+                  if kind == topic_type]  # fmt: skip
         if len(topics) > 1:
-            raise ValueError(f"several behaviour status topics {topics}: set ~status")
+            raise ValueError(f"several {topic_type} topics {topics}")
         if topics or time.monotonic() >= deadline:
             return topics[0] if topics else ""
         time.sleep(0.05)
@@ -237,7 +238,10 @@ class SimNode:
         self.tf.sendTransform(tf)
 
     def _subscribe_status(self, timeout: float) -> None:
-        topic = self.status_topic or find_status_topic(timeout)
+        try:
+            topic = self.status_topic or find_topic(BehaviourStatus._type, timeout)
+        except ValueError as error:
+            raise ValueError(f"{error}: set ~status") from None
         if not topic:
             rospy.logwarn("sim: no behaviour status topic found; every frame will count as missed")
             return
