@@ -357,6 +357,7 @@ void PathLaw::reset() {
   fallback_.reset();
   points_.clear();
   bridges_.clear();
+  stretch_end_.reset();
   path_state_ = PathState();
   following_ = false;
   has_stamp_ = false;
@@ -440,6 +441,7 @@ Twist2D PathLaw::step(const LineObservation& frame) {
     // next starts a fresh path.
     points_.clear();
     bridges_.clear();
+    stretch_end_.reset();
     path_state_.points = 0;
     return fallback_.step(LineObservation{taken, stamp, frame.applied, frame.sent, frame.latency});
   }
@@ -456,6 +458,7 @@ void PathLaw::moveMemory(const Twist2D& applied, double dt) {
   if (dt > config_.path.max_frame_gap || !std::isfinite(distance) || !std::isfinite(turn)) {
     points_.clear();
     bridges_.clear();
+    stretch_end_.reset();
     travel_direction_.reset();
     return;
   }
@@ -465,6 +468,10 @@ void PathLaw::moveMemory(const Twist2D& applied, double dt) {
   for (BridgeStart& bridge : bridges_) {
     bridge.position = rotated(bridge.position - displacement, -turn);
     bridge.tangent = rotated(bridge.tangent, -turn);
+  }
+  if (stretch_end_) {
+    stretch_end_->position = rotated(stretch_end_->position - displacement, -turn);
+    stretch_end_->tangent = rotated(stretch_end_->tangent, -turn);
   }
   if (travel_direction_) travel_direction_ = rotated(*travel_direction_, -turn);
 }
@@ -534,23 +541,32 @@ void PathLaw::rememberBand(const BandMeasurement& band, bool look_ahead, double 
     if (!look_ahead && step.dot(step) >= gap * gap) startBridge(*latest_of_band, *ground, stamp);
   }
   points_.push_back(PathPoint{*ground, stamp, look_ahead});
+  if (!look_ahead) stretch_end_ = stretchEnd(points_.back());
 }
 
-void PathLaw::startBridge(const PathPoint& before, const cv::Point2d& after, double stamp) {
+std::optional<PathLaw::BridgeStart> PathLaw::stretchEnd(const PathPoint& end) {
   std::vector<cv::Point2d> positions;
   std::vector<double> stamps;
   for (const PathPoint& point : points_) {
-    if (point.look_ahead || point.stamp > before.stamp) continue;
+    if (point.look_ahead || point.stamp > end.stamp) continue;
     positions.push_back(point.position);
     stamps.push_back(point.stamp);
   }
-  appendBridges(positions, stamps);  // the stretch before may be short and end an earlier jump
-  const std::optional<PathDirection> start =
-      directionAt(before.position, positions, stamps, config_.path);
+  appendBridges(positions, stamps);  // the stretch may be short and end an earlier jump
+  const std::optional<PathDirection> direction =
+      directionAt(end.position, positions, stamps, config_.path);
+  if (!direction) return std::nullopt;
+  return BridgeStart{end.position, direction->tangent, direction->curvature, end.stamp, 0.0};
+}
+
+void PathLaw::startBridge(const PathPoint& before, const cv::Point2d& after, double stamp) {
+  std::optional<BridgeStart> start =
+      stretch_end_ && stretch_end_->stamp == before.stamp ? stretch_end_ : stretchEnd(before);
   // A jump backwards or sideways is not the line continuing.
   if (!start || (after - before.position).dot(start->tangent) <= 0.0) return;
-  bridges_.push_back(
-      BridgeStart{before.position, start->tangent, start->curvature, before.stamp, stamp});
+  start->position = before.position;
+  start->end_stamp = stamp;
+  bridges_.push_back(*start);
 }
 
 void PathLaw::appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps) {
