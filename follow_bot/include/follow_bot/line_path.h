@@ -141,6 +141,9 @@ class PathLaw : public SteeringLaw {
   // Remembers where a jump from `before` (the band's previous sighting) to `after` begins,
   // when it is a jump forward along a stretch whose heading and curvature fit.
   void startBridge(const PathPoint& before, const cv::Point2d& after, double stamp);
+  // The direction and curvature at the band's sighting `end`, fitted on its remembered points
+  // up to it (and the bridges before it); empty when too few.
+  std::optional<BridgeStart> stretchEnd(const PathPoint& end);
   // Appends samples of the curves across the remembered jumps, and forgets the jumps whose
   // sightings past them are all forgotten.
   void appendBridges(std::vector<cv::Point2d>& positions, std::vector<double>& stamps);
@@ -157,6 +160,11 @@ class PathLaw : public SteeringLaw {
   PdLaw fallback_;
   std::deque<PathPoint> points_;
   std::deque<BridgeStart> bridges_;  // oldest first
+  // stretchEnd() at the band's latest sighting, fitted when it was seen and carried by the
+  // motion: a jump found later bridges from this, not from the few points left of the stretch
+  // by then (those further behind the base than keep_behind are forgotten, and a curve fitted
+  // on the last few centimetres is skewed).
+  std::optional<BridgeStart> stretch_end_;
   PathState path_state_;
   bool following_ = false;
   bool has_stamp_ = false;
