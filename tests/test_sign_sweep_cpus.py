@@ -10,7 +10,8 @@ When the alignment's Gauss-Newton system was solved in floats (cv::findTransform
 at worst over the sweep); solved in doubles on centred coordinates, 0.001 deg at worst.
 
 Needs the built workspace (`rosrun follow_bot follow_bot_core_test`). Run with -s to print the
-per-position table.
+per-position table. Four sweeps of the gtest (~40 s): `make test-full` only; `make test` runs
+the native one as the gtest itself.
 """
 
 import os
@@ -18,6 +19,8 @@ import re
 import subprocess
 
 import pytest
+
+pytestmark = pytest.mark.full
 
 GTEST = "SignDetectorTest.NoFlipsOverAFrontoParallelSweep"
 # OpenCV 4.6 dispatches SSE4.1 and up at run time; each step down disables the set above it
