@@ -59,7 +59,7 @@ def start(env, node: str, ros_name: str) -> subprocess.Popen:
         # An unknown steering law.
         ("follower", "mode", {"mode": "banana"}, {"mode": "pd"}),
         # Each within the .cfg's ranges, but the core rejects the combination.
-        ("follower", "h_min", {"h_min": 40}, {"h_min": 25}),  # above ~h_max (30)
+        ("follower", "h_min", {"h_min": 45}, {"h_min": 25}),  # above ~h_max (40)
         ("beacon_chaser", "stop_colour", {"stop_colour": "green"}, {"stop_colour": "blue"}),
     ],
 )

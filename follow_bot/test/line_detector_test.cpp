@@ -90,7 +90,7 @@ TEST(LineDetector, DefaultsAreTheLecture) {
   EXPECT_EQ(config.lower.h, 20);
   EXPECT_EQ(config.lower.s, 100);
   EXPECT_EQ(config.lower.v, 40);  // not the lecture's 100: paint in a deep shadow reads V ~70
-  EXPECT_EQ(config.upper.h, 34);  // not the lecture's 30: real paint in a bluish shadow reads 33
+  EXPECT_EQ(config.upper.h, 40);  // not the lecture's 30: paint in a bluish shadow reads 32-38
   EXPECT_EQ(config.band.rows, 20);
   EXPECT_FALSE(config.look_ahead_enabled);
   // On the default mounting the bands land where the lecture's fractions put them: rows
@@ -932,8 +932,8 @@ TEST(LineDetector, ValidatesItsConfiguration) {
             "lower.s must be in [0, 255], got -1");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.upper.v = 256; }),
             "upper.v must be in [0, 255], got 256");
-  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.lower.h = 40; }),
-            "lower.h (40) must be <= upper.h (34); the box would match nothing");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.lower.h = 45; }),
+            "lower.h (45) must be <= upper.h (40); the box would match nothing");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.band.distance_m = 0.0; }),
             "band.distance_m must be > 0, got 0");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) {

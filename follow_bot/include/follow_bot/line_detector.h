@@ -132,8 +132,9 @@ BandPlacement placeBand(const CameraGeometry& camera, const BandConfig& band, in
 struct LineDetectorConfig {
   using Defaults = FollowerDefaults;
   // The lecture's yellow, but V >= 40 where the lecture has 100 (paint in a deep shadow reads
-  // V ~70; dark floor is kept out by the floor test below, not by a V floor), and H <= 34 where
-  // the lecture has 30 (real paint reads 29-31 in daylight, 32-34 in a bluish shadow).
+  // V ~70; dark floor is kept out by the floor test below, not by a V floor), and H <= 40 where
+  // the lecture has 30 (real paint reads 29-31 in daylight; a sky-lit shadow's bluish tint
+  // moves it towards green: 32-34 under a mild tint, 37-38 under a strong one).
   HsvColor lower{Defaults::h_min, Defaults::s_min, Defaults::v_min};
   HsvColor upper{Defaults::h_max, Defaults::s_max, Defaults::v_max};
   BandConfig band;  // on the default mounting, the lecture's band
