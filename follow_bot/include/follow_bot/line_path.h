@@ -23,10 +23,11 @@
 //
 // Where the camera never saw the line (its nearest floor lies beyond the end of a tight curve,
 // or the paint has a gap) successive sightings of the band jump by bridge_gap or more. The end
-// of the stretch before the jump is then remembered with its heading and curvature, and every
-// frame the jump is bridged by two arcs: that stretch's own curve continued, then the arc that
-// meets the first sighting past the jump along the heading fitted to the sightings there (a
-// single arc while they are too few for a heading). A curve that ends unseen and runs into a
+// of the stretch before the jump is then remembered with its heading and curvature (fitted
+// when that end was seen, with the fitted window's curvature), and every frame the jump is
+// bridged by two arcs: that stretch's own curve continued, then the arc that meets the first
+// sighting past the jump along the heading fitted to the sightings there (a single arc while
+// they are too few for a heading). A curve that ends unseen and runs into a
 // straight or another curve is bridged exactly. The law tracks the bridge like any remembered
 // stretch.
 //
