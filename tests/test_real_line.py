@@ -185,25 +185,32 @@ def test_the_floor_test_not_a_v_floor_keeps_dark_floor_out(realdata):
     assert misses(realdata, with_changes(lower=core.HsvColor(h=20, s=100, v=0))) == []
 
 
+LINES = sum(label is not None for label in LABELS.values())
+
+
+def count_in_shadow(realdata, detector_config, brightness, tint=SKY_SHADOW_TINT):
+    """Over the labelled bands in a shadow: (lines found, bands without a line left without one)."""
+    hits = clean = 0
+    for (name, first_row), label in LABELS.items():
+        band = measure(realdata, detector_config, name, first_row, brightness, tint)
+        if label is None:
+            clean += not band.found
+        else:
+            hits += verdict(band, label)
+    return hits, clean
+
+
 def test_the_line_in_a_shadow_on_the_real_frames(realdata, record_property):
     """Every labelled frame as if a bluish hard shadow covered it: at 55 % of the light nearly
     every line is still found, at 30 % (real paint's yellowness there is ~45, at the floor test's
     margin) about half; a line where there is none, never. The lecture finds none at 30 %."""
     found = {}
     for brightness in (0.55, 0.3):
-        lines = hits = clean = lecture_hits = 0
-        for (name, first_row), label in LABELS.items():
-            band = measure(realdata, core.LineDetectorConfig, name, first_row, brightness)
-            if label is None:
-                clean += not band.found
-            else:
-                lines += 1
-                hits += verdict(band, label)
-                lecture = measure(realdata, lecture_config, name, first_row, brightness)
-                lecture_hits += verdict(lecture, label)
+        hits, clean = count_in_shadow(realdata, core.LineDetectorConfig, brightness)
+        lecture_hits, _ = count_in_shadow(realdata, lecture_config, brightness)
         found[brightness] = hits
-        record_property(f"shadow {brightness}", f"{hits}/{lines} lines, lecture {lecture_hits}")
-        assert clean == len(LABELS) - lines, brightness
+        record_property(f"shadow {brightness}", f"{hits}/{LINES} lines, lecture {lecture_hits}")
+        assert clean == len(LABELS) - LINES, brightness
         if brightness == 0.3:
             assert lecture_hits == 0
     assert found[0.55] >= 22, found
@@ -219,18 +226,13 @@ def test_the_line_in_a_bluer_shadow_needs_the_wider_hue_window(realdata, record_
     found = {}
     for brightness in (0.55, 0.3):
         for name, config in (("default", core.LineDetectorConfig), ("h_max 34", narrow)):
-            hits = clean = 0
-            for (frame, first_row), label in LABELS.items():
-                band = measure(realdata, config, frame, first_row, brightness, BLUER_SHADOW_TINT)
-                if label is None:
-                    clean += not band.found
-                else:
-                    hits += verdict(band, label)
-            assert clean == sum(label is None for label in LABELS.values()), (name, brightness)
+            hits, clean = count_in_shadow(realdata, config, brightness, BLUER_SHADOW_TINT)
+            assert clean == len(LABELS) - LINES, (name, brightness)
             found[name, brightness] = hits
         record_property(
             f"bluer shadow {brightness}",
-            f"{found['default', brightness]}/24 lines, h_max 34: {found['h_max 34', brightness]}",
+            f"{found['default', brightness]}/{LINES} lines, "
+            f"h_max 34: {found['h_max 34', brightness]}",
         )
     # Measured: 20 and 10 of 24 with the default; 12 and 4 with h_max 34.
     assert found["default", 0.55] >= 19 and found["default", 0.3] >= 9, found
