@@ -172,9 +172,12 @@ std::optional<PathAtBase> fitPathAtBase(const std::vector<cv::Point2d>& position
   path.before_start = std::max(0.0, kept_min - s);
   path.lateral = foot.dot(cv::Point2d(-tangent.y, tangent.x));
   path.heading = std::atan2(tangent.y, tangent.x);
-  path.curvature = 2.0 * c / std::pow(1.0 + slope * slope, 1.5);
-  const double middle_slope = b + c * (kept_min + kept_max);
-  path.window_curvature = 2.0 * c / std::pow(1.0 + middle_slope * middle_slope, 1.5);
+  const auto curvatureAt = [&](double at) {
+    const double slope_at = b + 2.0 * c * at;
+    return 2.0 * c / std::pow(1.0 + slope_at * slope_at, 1.5);
+  };
+  path.curvature = curvatureAt(s);
+  path.window_curvature = curvatureAt(0.5 * (kept_min + kept_max));
   if (!std::isfinite(path.lateral) || !std::isfinite(path.heading) ||
       !std::isfinite(path.curvature) || !std::isfinite(path.window_curvature)) {
     return std::nullopt;
@@ -564,8 +567,9 @@ std::optional<PathLaw::BridgeStart> PathLaw::stretchEnd(const PathPoint& end) {
 }
 
 void PathLaw::startBridge(const PathPoint& before, const cv::Point2d& after, double stamp) {
-  std::optional<BridgeStart> start =
-      stretch_end_ && stretch_end_->stamp == before.stamp ? stretch_end_ : stretchEnd(before);
+  // Fitted when `before`, the band's latest sighting, was seen (empty: too few points then, and
+  // fewer now).
+  std::optional<BridgeStart> start = stretch_end_;
   // A jump backwards or sideways is not the line continuing.
   if (!start || (after - before.position).dot(start->tangent) <= 0.0) return;
   start->position = before.position;
