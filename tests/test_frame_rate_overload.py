@@ -1,7 +1,8 @@
 """The parker fed frames faster than it can answer them, with frames that cost real work: a tag
 at 4x its frame rate (120 Hz), a sign at 700 Hz (a tracked sign frame costs only ~5 ms; at
 240 Hz it still answered 95 %). The input queue of one drops stale frames, so the latency from
-sending a frame to its pose stays bounded and does not grow, and the poses come in frame order.
+sending a frame to its pose stays bounded and does not grow, the poses come in frame order, and
+the node answers all through the flood.
 
 The ROS client runs in a child process (this file with --client)."""
 
@@ -64,6 +65,10 @@ def client(key: str) -> None:
                 "median_latency_first_s": statistics.median(first),
                 "median_latency_last_s": statistics.median(last),
                 "in_order": stamps == sorted(stamps),
+                "answered_each_second": [
+                    sum(second <= at - start < second + 1 for _, at in poses)
+                    for second in range(int(SECONDS))
+                ],
             }
         )
     )
@@ -87,10 +92,14 @@ def test_latency_bounded_and_not_growing(overload):
     assert r["median_latency_last_s"] <= r["median_latency_first_s"] + 0.1, r
 
 
-def test_poses_in_frame_order_and_some_answered(overload):
+def test_poses_in_frame_order_and_answered_all_through(overload):
+    # How many frames of the flood the node answers depends on the CPU the sender and the
+    # machine's load leave it (the sign: 139-784 of ~2000 on the 2-core build machine, 9 % at
+    # load 7), so the count is held only to what a node that stalls or falls silent would fail:
+    # answers in every second of the flood.
     key, r = overload
     assert r["in_order"], r
-    assert r["answered"] >= 0.1 * r["sent"], r
+    assert min(r["answered_each_second"]) >= 5, r
 
 
 if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
