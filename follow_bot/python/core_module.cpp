@@ -403,6 +403,8 @@ void bindBeaconController(py::module_& m) {
       .def_readwrite("stop_min_area", &Config::stop_min_area)
       .def_readwrite("stop_release_delay", &Config::stop_release_delay)
       .def_readwrite("approach_speed", &Config::approach_speed)
+      .def_readwrite("approach_taper", &Config::approach_taper)
+      .def_readwrite("creep_speed", &Config::creep_speed)
       .def_readwrite("turn_gain", &Config::turn_gain)
       .def_readwrite("target_colour", &Config::target_colour)
       .def_readwrite("target", &Config::target)

@@ -8,6 +8,7 @@
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 namespace follow_bot {
@@ -387,7 +388,7 @@ TEST(RectifyBlob, WithoutALensIsTheBlobsOwn) {
 }
 
 TEST(RectifyBlob, ARawFrameThroughTheLensMeasuresAsTheRectifiedFrame) {
-  // The ball near where follow-green holds (0.47 m from its surface, cut by the frame's bottom
+  // The ball near where follow-green holds (0.50 m from its surface, cut by the frame's bottom
   // edge), off the axis and farther: the rectified contour of the raw blob has the pinhole
   // blob's area inside the frame, and where the pinhole frame does not cut the ball its area,
   // centroid and size, while the raw blob is 5-16 % smaller. The lens sees wider: where the
@@ -539,9 +540,73 @@ TEST(FollowGreenStopRed, HoldsWhenGreenIsClose) {
   EXPECT_EQ(controller.state(), BeaconState::kHolding);
   EXPECT_EQ(twist.linear, 0.0);
   EXPECT_EQ(twist.angular, 0.0);
-  twist = controller.update(green(330.0, close - 1.0), 0.1);
+  // A dip of the area within hold_release of the hold (exposure, noise) keeps it holding.
+  const double release = close / std::pow(1.0 + controller.config().hold_release, 2);
+  twist = controller.update(green(330.0, release + 1.0), 0.1);
+  EXPECT_EQ(controller.state(), BeaconState::kHolding);
+  EXPECT_EQ(twist.linear, 0.0);
+  twist = controller.update(green(330.0, release - 1.0), 0.2);
   EXPECT_EQ(controller.state(), BeaconState::kApproaching);
   EXPECT_GT(twist.linear, 0.0);
+  // From an approach, the hold starts at close_area itself.
+  twist = controller.update(green(330.0, close - 1.0), 0.3);
+  EXPECT_EQ(controller.state(), BeaconState::kApproaching);
+}
+
+TEST(FollowGreenStopRed, SlowsDownNearTheHoldToCreepSpeed) {
+  BeaconController controller;
+  const BeaconControllerConfig& config = controller.config();
+  // Half the taper's distance left: half the speed.
+  const double half_way = config.close_area / std::pow(1.0 + 0.5 * config.approach_taper, 2);
+  EXPECT_NEAR(controller.update(green(320.0, half_way), 0.0).linear, 0.5 * config.approach_speed,
+              1e-9);
+  EXPECT_EQ(controller.update(green(320.0, config.close_area - 1.0), 0.1).linear,
+            config.creep_speed);
+  BeaconControllerConfig lecture = config;
+  lecture.approach_taper = 0.0;
+  EXPECT_EQ(BeaconController(lecture).update(green(320.0, config.close_area - 1.0), 0.0).linear,
+            lecture.approach_speed);
+}
+
+// Where the follow mode holds in front of a 0.2 m ball straight ahead, from 3 m, when the base
+// starts each command `delay` s late and reaches its speed with a first-order lag of time
+// constant `lag` s (the harsh profile's 50-150 ms and 0.1-0.2 s). The ball's silhouette area
+// at a distance d from the camera is pi f^2 r^2 / (d^2 - r^2), exactly, for a pinhole of focal
+// length f = 554 px (the harness camera's). Returns the camera-to-centre distance at rest.
+double holdDistance(const BeaconControllerConfig& config, double delay, double lag) {
+  constexpr double kDt = 1.0 / 30.0;
+  constexpr double kFocal = 554.3;
+  constexpr double kRadius = 0.2;
+  BeaconController controller(config);
+  std::vector<double> in_flight(static_cast<size_t>(std::lround(delay / kDt)), 0.0);
+  double distance = 3.0;
+  double speed = 0.0;
+  for (double t = 0.0; t < 40.0; t += kDt) {
+    const double area =
+        kPi * kFocal * kFocal * kRadius * kRadius / (distance * distance - kRadius * kRadius);
+    in_flight.push_back(controller.update(green(320.0, area), t).linear);
+    const double commanded = in_flight.front();
+    in_flight.erase(in_flight.begin());
+    speed += lag > 0.0 ? (commanded - speed) * (1.0 - std::exp(-kDt / lag)) : commanded - speed;
+    distance -= speed * kDt;
+  }
+  return distance;
+}
+
+TEST(FollowGreenStopRed, HoldsWithinAFewMillimetresOfTheHoldDistanceOnALateSluggishBase) {
+  const BeaconControllerConfig config;
+  const double hold = std::sqrt(kPi * 554.3 * 554.3 * 0.04 / config.close_area + 0.04);
+  EXPECT_NEAR(holdDistance(config, 0.0, 0.0), hold, 0.002);
+  for (const auto& [delay, lag] : {std::pair{0.067, 0.1}, {0.1, 0.2}, {0.15, 0.2}}) {
+    // Short of the hold by creep_speed x (delay + lag) at most, ~7 mm.
+    const double overrun = hold - holdDistance(config, delay, lag);
+    EXPECT_GE(overrun, -0.002) << delay << " s, " << lag << " s";
+    EXPECT_LE(overrun, config.creep_speed * (delay + lag) + 0.002) << delay << " s, " << lag << " s";
+  }
+  // At full speed to the hold (the lecture's law) the same base overruns by 63 mm.
+  BeaconControllerConfig lecture = config;
+  lecture.approach_taper = 0.0;
+  EXPECT_GT(hold - holdDistance(lecture, 0.1, 0.2), 0.04);
 }
 
 TEST(FollowGreenStopRed, SearchTurnsTowardWhereGreenWasLastSeen) {

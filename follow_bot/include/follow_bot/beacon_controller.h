@@ -149,7 +149,7 @@ struct BeaconControllerConfig {
   // Follow mode. Colour names refer to the detector's ColourSpec names.
   std::string follow_colour = BeaconChaserDefaults::follow_colour;
   std::string stop_colour = BeaconChaserDefaults::stop_colour;
-  // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre, ~85000 px^2 0.47 m from its
+  // A 0.2 m ball covers ~30000 px^2 about 1.1 m from its centre, ~85000 px^2 0.50 m from its
   // surface (what the scenarios run with; cfg/BeaconChaser.cfg's default).
   double close_area =
       BeaconChaserDefaults::close_area;  // px^2: hold once the follow blob is at least this big
@@ -159,6 +159,17 @@ struct BeaconControllerConfig {
   // misses it does not let the robot lurch forward.
   double stop_release_delay = BeaconChaserDefaults::stop_release_delay;  // s
   double approach_speed = BeaconChaserDefaults::approach_speed;          // m/s
+  // Within approach_taper (a fraction) of the hold distance the speed falls in proportion to
+  // the distance left, estimated from the area as a sphere's (distance ~ 1 / sqrt(area)), down
+  // to creep_speed: after the last forward command a real base moves on for its delay and motor
+  // lag (0.17-0.3 s in the harsh profile), which from full speed put the robot 34-54 mm nearer
+  // than the hold.
+  double approach_taper = BeaconChaserDefaults::approach_taper;
+  double creep_speed = BeaconChaserDefaults::creep_speed;  // m/s
+  // Once holding, the robot holds until the distance left exceeds this fraction of the hold
+  // distance (2 cm of 0.7 m): it rests at the hold's edge, where exposure drift and noise move
+  // the area by a percent or two from frame to frame, and each dip would restart a creep.
+  double hold_release = 0.03;
   // angular = -turn_gain * e with e = (centroid_x - width / 2) / (width / 2) in [-1, 1]; e = 1
   // is the image edge, 30 deg off the axis, for the harness camera.
   double turn_gain = BeaconChaserDefaults::turn_gain;  // rad/s per unit of normalised error
@@ -224,8 +235,10 @@ class BeaconController {
   //
   // Follow mode, in priority order: a stop-colour blob (found, area >= stop_min_area) in view
   // or seen within stop_release_delay -> zero, kStoppedByRed; no follow-colour blob ->
-  // kSearching; area >= close_area -> zero, kHolding; otherwise kApproaching: approach_speed
-  // and angular = -turn_gain * e. Areas and the centroid are the rectified blob's
+  // kSearching; area >= close_area (or, once holding, the distance left within hold_release)
+  // -> zero, kHolding; otherwise kApproaching: approach_speed
+  // (slowed within approach_taper of the hold, not below creep_speed) and
+  // angular = -turn_gain * e. Areas and the centroid are the rectified blob's
   // (rectifyBlob with config.camera; close_area against its area_in_frame), so raw frames
   // through a lens hold and steer as rectified ones.
   //

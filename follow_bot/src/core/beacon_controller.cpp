@@ -228,6 +228,9 @@ std::string validate(const BeaconControllerConfig& c) {
            requireAtLeast("stop_min_area", c.stop_min_area, 0.0),
            requireAtLeast("stop_release_delay", c.stop_release_delay, 0.0),
            requireAtLeast("approach_speed", c.approach_speed, 0.0),
+           requireAtLeast("approach_taper", c.approach_taper, 0.0),
+           requireAtLeast("creep_speed", c.creep_speed, 0.0),
+           requireAtLeast("hold_release", c.hold_release, 0.0),
            requireAtLeast("turn_gain", c.turn_gain, 0.0),
            requireName("target_colour", c.target_colour),
            prefixed("target.", validate(c.target)),
@@ -305,12 +308,22 @@ Twist2D BeaconController::followGreenStopRed(const BlobResult& blobs, double sta
   const double half_width = 0.5 * blobs.image_width;
   const double error = std::clamp((target.centroid.x - half_width) / half_width, -1.0, 1.0);
   if (error != 0.0) search_direction_ = error > 0.0 ? -1.0 : 1.0;
-  if (target.area_in_frame >= config_.close_area) {
+  // The distance left as a fraction of the hold distance: a sphere's silhouette area falls as
+  // the square of its distance.
+  const double distance_left = std::sqrt(config_.close_area / target.area_in_frame) - 1.0;
+  if (target.area_in_frame >= config_.close_area ||
+      (state_ == BeaconState::kHolding && distance_left <= config_.hold_release)) {
     state_ = BeaconState::kHolding;
     return Twist2D();
   }
   state_ = BeaconState::kApproaching;
-  return Twist2D{config_.approach_speed, -config_.turn_gain * error};
+  const double speed =
+      distance_left >= config_.approach_taper
+          ? config_.approach_speed
+          : std::clamp(config_.approach_speed * distance_left / config_.approach_taper,
+                       std::min(config_.creep_speed, config_.approach_speed),
+                       config_.approach_speed);
+  return Twist2D{speed, -config_.turn_gain * error};
 }
 
 Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {

@@ -97,6 +97,8 @@ BeaconChaserSettings beaconChaserSettings(const BeaconChaserConfig& cfg,
   controller.stop_min_area = cfg.stop_min_area;
   controller.stop_release_delay = cfg.stop_release_delay;
   controller.approach_speed = cfg.approach_speed;
+  controller.approach_taper = cfg.approach_taper;
+  controller.creep_speed = cfg.creep_speed;
   controller.turn_gain = cfg.turn_gain;
   controller.stop_distance = cfg.stop_distance;
   controller.max_linear = cfg.max_linear;
