@@ -34,7 +34,8 @@ struct ColourSpec {
   int median_hue_max = 90;
 };
 
-// The default spec of "red" (hue 0, blobs with a median hue up to 3: orange things are not red),
+// The default spec of "red" (hue 0, blobs with a median hue from -8 to 3: orange and pink things
+// are not red),
 // "green" (60) or "blue" (120); nullopt for other names.
 std::optional<ColourSpec> parseColourName(const std::string& name);
 

@@ -245,7 +245,10 @@ std::optional<ColourSpec> parseColourName(const std::string& name) {
   spec.name = name;
   if (name == "red") {
     spec.hue_centre = 0;
-    // Smarties: red sweets' median hue is 0, orange ones' 6..9; the harness's orange clutter 16.
+    // Smarties: red sweets' median hue is 0, orange ones' 6..9, a brown one's -6 (174); the
+    // harness's orange clutter 16, its pink clutter -15 (165: a pink box stopped the harsh
+    // follow-green sweep's member 005 for 9 s).
+    spec.median_hue_min = -8;
     spec.median_hue_max = 3;
   } else if (name == "green") {
     spec.hue_centre = 60;
