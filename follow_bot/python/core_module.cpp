@@ -231,6 +231,7 @@ void bindColourBlobs(py::module_& m) {
       .def_readwrite("s_min", &ColourSpec::s_min)
       .def_readwrite("v_min", &ColourSpec::v_min)
       .def_readwrite("median_hue_min", &ColourSpec::median_hue_min)
+      .def_readwrite("hue_offset_max", &ColourSpec::hue_offset_max)
       .def_readwrite("median_hue_max", &ColourSpec::median_hue_max);
   defKeywordInit(spec);
   m.def("parse_colour_name", &parseColourName, "name"_a,

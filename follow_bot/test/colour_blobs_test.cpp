@@ -219,6 +219,18 @@ TEST(ColourBlobDetector, RedIsFoundOnBothSidesOfTheHueWrap) {
   }
 }
 
+TEST(ColourBlobDetector, RedIsFoundOnAWoodFloorInsideItsSensitivity) {
+  // Wood at hue 15 (S 140) is inside red's window of 15: the ball and the floor made one blob,
+  // orange by its median, and no red was found. Pixels above hue 10 do not count as red.
+  const ColourBlobDetector detector;
+  cv::Mat frame(480, 640, CV_8UC3, bgrFromHsv(15, 140, 180));
+  drawDisk(frame, {320.0, 240.0}, 30.0, bgrFromHsv(0, 230, 220));
+  const ColourBlob& red = blobOf(detector.detect(frame), "red");
+  ASSERT_TRUE(red.found);
+  EXPECT_NEAR(red.centroid.x, 320.0, 0.5);
+  EXPECT_NEAR(red.centroid.y, 240.0, 0.5);
+}
+
 TEST(ColourBlobDetector, HueWindowWrapsAtTheTopForCustomColours) {
   ColourBlobConfig config;
   config.colours = {ColourSpec{"magenta", 170, 15, 100, 40}};  // 155..179 and 0..5

@@ -16,8 +16,9 @@
 namespace follow_bot {
 
 // A colour as a hue window plus saturation and value floors, in OpenCV's 8-bit HSV (H 0..179,
-// degrees / 2; S and V 0..255). Hues within `sensitivity` of `hue_centre` match, wrapping
-// around the hue circle, so red (centre 0) takes 0..s and 180 - s..179.
+// degrees / 2; S and V 0..255). Hues within `sensitivity` of `hue_centre` match (and at most
+// `hue_offset_max` above it), wrapping around the hue circle, so red (centre 0) takes 0..s and
+// 180 - s..179.
 struct ColourSpec {
   std::string name;
   int hue_centre = 0;                                   // 0..179
@@ -32,6 +33,10 @@ struct ColourSpec {
   // from orange by the whole blob, not pixel by pixel.
   int median_hue_min = -90;
   int median_hue_max = 90;
+  // Pixels count up to this far above hue_centre even where sensitivity reaches further. Red's
+  // is 10: a wood floor (hue 14-15, S 100-150) sits inside a window of 15, and a red ball on it
+  // merged with the floor into one blob, orange by its median, so the ball was not found.
+  int hue_offset_max = 90;
 };
 
 // The default spec of "red" (hue 0, blobs with a median hue from -8 to 3: orange and pink things

@@ -45,6 +45,7 @@ std::string checkSpec(const ColourSpec& spec) {
            requireInRange("v_min", spec.v_min, 0, 255),
            requireInRange("median_hue_min", spec.median_hue_min, -90, spec.median_hue_max),
            requireInRange("median_hue_max", spec.median_hue_max, spec.median_hue_min, 90),
+           requireInRange("hue_offset_max", spec.hue_offset_max, 0, 90),
        }) {
     if (!error.empty()) return error;
   }
@@ -250,6 +251,9 @@ std::optional<ColourSpec> parseColourName(const std::string& name) {
     // follow-green sweep's member 005 for 9 s).
     spec.median_hue_min = -8;
     spec.median_hue_max = 3;
+    // Smarties: 99 % of a red sweet's pixels lie in -8..4; what an orange sweet keeps below 10
+    // still has a median of 6 or more.
+    spec.hue_offset_max = 10;
   } else if (name == "green") {
     spec.hue_centre = 60;
   } else if (name == "blue") {
@@ -360,7 +364,7 @@ void ColourBlobDetector::cleanedMask(const cv::Mat& hsv, const ColourSpec& spec,
   // The hue window [centre - s, centre + s] on the hue circle is one interval, or two when it
   // crosses 0/179 (red).
   const int low = spec.hue_centre - spec.sensitivity;
-  const int high = spec.hue_centre + spec.sensitivity;
+  const int high = spec.hue_centre + std::min(spec.sensitivity, spec.hue_offset_max);
   const auto threshold = [&](int hue_low, int hue_high, cv::Mat& out) {
     cv::inRange(hsv, cv::Scalar(hue_low, spec.s_min, spec.v_min), cv::Scalar(hue_high, 255, 255),
                 out);
