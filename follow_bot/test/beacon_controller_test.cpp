@@ -601,7 +601,8 @@ TEST(FollowGreenStopRed, HoldsWithinAFewMillimetresOfTheHoldDistanceOnALateSlugg
     // Short of the hold by creep_speed x (delay + lag) at most, ~7 mm.
     const double overrun = hold - holdDistance(config, delay, lag);
     EXPECT_GE(overrun, -0.002) << delay << " s, " << lag << " s";
-    EXPECT_LE(overrun, config.creep_speed * (delay + lag) + 0.002) << delay << " s, " << lag << " s";
+    EXPECT_LE(overrun, config.creep_speed * (delay + lag) + 0.002)
+        << delay << " s, " << lag << " s";
   }
   // At full speed to the hold (the lecture's law) the same base overruns by 63 mm.
   BeaconControllerConfig lecture = config;
