@@ -573,18 +573,21 @@ TEST(FollowGreenStopRed, SlowsDownNearTheHoldToCreepSpeed) {
 // constant `lag` s (the harsh profile's 50-150 ms and 0.1-0.2 s). The ball's silhouette area
 // at a distance d from the camera is pi f^2 r^2 / (d^2 - r^2), exactly, for a pinhole of focal
 // length f = 554 px (the harness camera's). Returns the camera-to-centre distance at rest.
+constexpr double kHarnessFocalPx = 554.3;
+constexpr double kBallRadius = 0.2;
+double ballArea(double distance) {
+  return kPi * kHarnessFocalPx * kHarnessFocalPx * kBallRadius * kBallRadius /
+         (distance * distance - kBallRadius * kBallRadius);
+}
+
 double holdDistance(const BeaconControllerConfig& config, double delay, double lag) {
   constexpr double kDt = 1.0 / 30.0;
-  constexpr double kFocal = 554.3;
-  constexpr double kRadius = 0.2;
   BeaconController controller(config);
   std::vector<double> in_flight(static_cast<size_t>(std::lround(delay / kDt)), 0.0);
   double distance = 3.0;
   double speed = 0.0;
   for (double t = 0.0; t < 40.0; t += kDt) {
-    const double area =
-        kPi * kFocal * kFocal * kRadius * kRadius / (distance * distance - kRadius * kRadius);
-    in_flight.push_back(controller.update(green(320.0, area), t).linear);
+    in_flight.push_back(controller.update(green(320.0, ballArea(distance)), t).linear);
     const double commanded = in_flight.front();
     in_flight.erase(in_flight.begin());
     speed += lag > 0.0 ? (commanded - speed) * (1.0 - std::exp(-kDt / lag)) : commanded - speed;
@@ -595,7 +598,10 @@ double holdDistance(const BeaconControllerConfig& config, double delay, double l
 
 TEST(FollowGreenStopRed, HoldsWithinAFewMillimetresOfTheHoldDistanceOnALateSluggishBase) {
   const BeaconControllerConfig config;
-  const double hold = std::sqrt(kPi * 554.3 * 554.3 * 0.04 / config.close_area + 0.04);
+  // ballArea(hold) == close_area.
+  const double hold = std::sqrt(kPi * kHarnessFocalPx * kHarnessFocalPx * kBallRadius *
+                                    kBallRadius / config.close_area +
+                                kBallRadius * kBallRadius);
   EXPECT_NEAR(holdDistance(config, 0.0, 0.0), hold, 0.002);
   for (const auto& [delay, lag] : {std::pair{0.067, 0.1}, {0.1, 0.2}, {0.15, 0.2}}) {
     // Short of the hold by creep_speed x (delay + lag) at most, ~7 mm.

@@ -39,9 +39,8 @@ struct ColourSpec {
   int hue_offset_max = 90;
 };
 
-// The default spec of "red" (hue 0, blobs with a median hue from -8 to 3: orange and pink things
-// are not red),
-// "green" (60) or "blue" (120); nullopt for other names.
+// The default spec of "red" (hue 0, pixels up to hue 10, blobs with a median hue from -8 to 3:
+// orange and pink things are not red), "green" (60) or "blue" (120); nullopt for other names.
 std::optional<ColourSpec> parseColourName(const std::string& name);
 
 // Fills `specs` with the default specs of `names` (e.g. a ROS list parameter). Returns "" on

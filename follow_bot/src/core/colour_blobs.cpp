@@ -361,8 +361,8 @@ ColourBlobDetector::ColourBlobDetector(const ColourBlobConfig& config)
 
 void ColourBlobDetector::cleanedMask(const cv::Mat& hsv, const ColourSpec& spec,
                                      cv::Mat& mask) const {
-  // The hue window [centre - s, centre + s] on the hue circle is one interval, or two when it
-  // crosses 0/179 (red).
+  // The hue window [centre - s, centre + min(s, hue_offset_max)] on the hue circle is one
+  // interval, or two when it crosses 0/179 (red).
   const int low = spec.hue_centre - spec.sensitivity;
   const int high = spec.hue_centre + std::min(spec.sensitivity, spec.hue_offset_max);
   const auto threshold = [&](int hue_low, int hue_high, cv::Mat& out) {
