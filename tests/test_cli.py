@@ -2,6 +2,7 @@
 exits 0 (starting nothing), bad usage exits 2 with the problem and the usage on stderr. A node's
 --help also names its topics and the README that documents its parameters."""
 
+import json
 import os
 import re
 import subprocess
@@ -120,3 +121,23 @@ def test_the_simulator_starts_without_warnings():
         )  # fmt: skip
     assert sim.returncode == 0, sim.stderr
     assert "Warning" not in sim.stderr and "WARN" not in sim.stdout + sim.stderr, sim.stderr
+
+
+def test_a_behaviour_dead_at_launch_ends_its_run_as_could_not_run(tmp_path):
+    """A follower refusing its ~max_linear at start-up: the lockstep simulator's first frame gets
+    no answer from a status topic nobody publishes, so the run ends there as an error (it used
+    to wait the reply timeout, 2 s, on each of the 6 000 frames of its 200 s)."""
+    scenario = tmp_path / "dead.yaml"
+    scenario.write_text(
+        "name: dead_at_launch\nworld: course\nduration: 200.0\n"
+        "behaviour: {launch: follow_bot follower.launch, args: {max_linear: -1}}\n"
+        "criteria: {lap.complete: {equals: true}}\n"
+    )
+    done = subprocess.run(
+        [*TOOLS["run_scenario"], str(scenario), "--out", str(tmp_path / "out")],
+        capture_output=True, text=True, timeout=240,
+    )  # fmt: skip
+    assert done.returncode == 2, done.stdout + done.stderr  # 2: a run could not be played
+    assert "0/1 passed (1 could not run)" in done.stdout, done.stdout
+    result = json.loads((tmp_path / "out" / "summary.json").read_text())["runs"][0]
+    assert result["error"].startswith("the behaviour under test is not running"), result

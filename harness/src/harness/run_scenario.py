@@ -52,6 +52,7 @@ from harness.scenario import (
     metrics,
     scenario_world,
 )
+from harness.sim_node import BEHAVIOUR_GONE
 from harness.world import WorldError
 
 MASTER_START_TIMEOUT = 20.0  # wall s
@@ -261,6 +262,8 @@ def run_one(
             if progress:
                 show_progress(scenario, env, processes)
             sim.wait(timeout=RUN_TIMEOUT_FLOOR + 20.0 * scenario.duration)
+            if sim.returncode == BEHAVIOUR_GONE:
+                raise RuntimeError(f"the behaviour under test is not running (see {out}/ros.log)")
         finally:
             # The nodes first, together; the master last, so they unregister from it.
             stop(*(p for p in processes if p is not roscore))

@@ -11,8 +11,10 @@ names other than /clock are relative, so under ROS_NAMESPACE or <group ns> the s
 behaviour it drives share one namespace.
 
 Lockstep (default): publish frame k, wait for the one status the behaviour answers with (up to
-~reply_timeout wall seconds; a miss is counted), apply the command it says it sent on cmd_vel
-(none sent: the behaviour is quiet, its last command was a zero, the robot stands),
+~reply_timeout wall seconds; a miss is counted, and a miss with no publisher left on the status
+topic ends the run: the behaviour is not running, exit code BEHAVIOUR_GONE), apply the command
+it says it sent on cmd_vel (none sent: the behaviour is quiet, its last command was a zero, the
+robot stands),
 integrate one step, repeat: runs are repeatable and as fast as the behaviour. Steps without a
 frame (camera dropout) pass at wall pace and apply what arrives on cmd_vel (the watchdog's
 stop). Real-time (~lockstep false): frames at ~rate_hz of wall clock, the latest cmd_vel applied.
@@ -55,6 +57,9 @@ from harness.scenario import ScenarioError, load_scenario, scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
 from harness.world import WorldError, load_world, resolve_world_path
+
+# The exit code of a lockstep run ended because the behaviour under test is not running.
+BEHAVIOUR_GONE = 3
 
 # The robot description's root (harness/robot_description.py): a base driver's odom child frame.
 BASE_FRAME = "base_footprint"
@@ -306,7 +311,12 @@ class SimNode:
 
     # -- loops ------------------------------------------------------------------------------
 
-    def run(self) -> None:
+    def _behaviour_gone(self) -> bool:
+        """No publisher on the status topic: the behaviour died or never started."""
+        return self.status_sub is None or self.status_sub.get_num_connections() == 0
+
+    def run(self) -> int:
+        """Plays the run; the process's exit code (0, or BEHAVIOUR_GONE)."""
         video = None
         if self.video_path:
             cam = self.sim.renderer.camera
@@ -330,6 +340,12 @@ class SimNode:
                 if self.lockstep:
                     if frame:
                         missed = not self.inbox.wait(self.reply_timeout)
+                        if missed and self._behaviour_gone():
+                            rospy.logerr(
+                                "sim: no answer and no publisher on the behaviour's status "
+                                f"topic at {self.sim.time:.2f} s: the behaviour is not running"
+                            )
+                            return BEHAVIOUR_GONE
                     else:
                         # Frames withheld (camera dropout): sim time passes at wall pace, as on a
                         # robot, so the behaviour's watchdog timers fire on time even when the
@@ -357,6 +373,7 @@ class SimNode:
             if video is not None:
                 video.release()
             self._write_record(time.monotonic() - loop_start)
+        return 0
 
     def _write_record(self, loop_wall: float) -> None:
         if not self.record_path:
@@ -382,7 +399,7 @@ def main() -> None:
     except (ScenarioError, WorldError, ValidationError, ValueError) as error:
         rospy.logfatal(f"sim: {error}")
         raise SystemExit(2) from None
-    node.run()
+    raise SystemExit(node.run())
 
 
 if __name__ == "__main__":
