@@ -167,6 +167,13 @@ class BeaconChaserNode : public ::testing::Test {
     return count;
   }
 
+  // logsFrom once at least one such line came (rosout is asynchronous), or after 10 s of wall
+  // time without one: 0.
+  int waitForLogs(const std::string& node, const std::string& words) {
+    spinUntil([&] { return logsFrom(node, words) > 0; }, 10.0);
+    return logsFrom(node, words);
+  }
+
   ros::NodeHandle nh_;
   Chaser follow_{nh_, "/follow", "/beacon_follow"};
   Chaser approach_{nh_, "/approach", "/beacon_approach"};
@@ -185,13 +192,13 @@ TEST_F(BeaconChaserNode, MalformedFramesAreDroppedAndEveryGoodFrameGetsOneTwist)
     }
     // The good frame's answer comes last; the watchdog's one stop may precede it, since bad
     // frames do not count as frames.
-    const auto replies = send(follow_, frame(floorWithBall(kGreen)), 0.2);
+    const auto replies = sendAnswered(follow_, frame(floorWithBall(kGreen)));
     ASSERT_GE(replies.size(), 1u) << "no answer to the good frame after bad frame " << i;
     ASSERT_LE(replies.size(), 2u);
     if (replies.size() == 2) EXPECT_TRUE(isZero(replies[0]));
     EXPECT_TRUE(sane(replies.back()));
   }
-  EXPECT_GE(logsFrom("/beacon_follow", "dropping frame"), 1);
+  EXPECT_GE(waitForLogs("/beacon_follow", "dropping frame"), 1);
 }
 
 TEST_F(BeaconChaserNode, FramesWithoutBeaconsGetOneSearchTwistEach) {
@@ -271,7 +278,7 @@ TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
     EXPECT_TRUE(isZero(replies[0])) << "no camera_info yet, frame " << i;
   }
   const double elapsed = (ros::WallTime::now() - start).toSec();
-  const int warnings = logsFrom("/beacon_approach", "camera_info");
+  const int warnings = waitForLogs("/beacon_approach", "camera_info");
   EXPECT_GE(warnings, 1) << "holding still must be explained";
   EXPECT_LE(warnings, 1 + static_cast<int>(elapsed / 2.0))
       << "the explanation is throttled to one per 2 s, not one per frame (" << elapsed << " s)";
@@ -285,7 +292,7 @@ TEST_F(BeaconChaserNode, ApproachHoldsStillWithoutUsableCameraInfo) {
     ASSERT_EQ(replies.size(), 1u);
     EXPECT_TRUE(isZero(replies[0])) << "all-zero camera_info, frame " << i;
   }
-  EXPECT_GE(logsFrom("/beacon_approach", "ignoring camera_info"), 1);
+  EXPECT_GE(waitForLogs("/beacon_approach", "ignoring camera_info"), 1);
 
   const sensor_msgs::CameraInfo valid = harnessCameraInfo();
   double max_linear = 0.0;
@@ -313,10 +320,9 @@ TEST_F(BeaconChaserNode, ApproachFitsCameraInfoToTheFrameSize) {
       EXPECT_TRUE(isZero(reply)) << "frame " << i << ": only the watchdog's stop may answer";
     }
   }
-  spinFor(0.5);  // rosout is asynchronous
-  EXPECT_GE(logsFrom("/beacon_approach",
-                     "dropping frame: the frame is 1280x720 but /approach/camera_info is for "
-                     "640x480"),
+  EXPECT_GE(waitForLogs("/beacon_approach",
+                        "dropping frame: the frame is 1280x720 but /approach/camera_info is for "
+                        "640x480"),
             1);
 }
 
@@ -377,8 +383,7 @@ TEST_F(BeaconChaserNode, ReconfigureAppliesClampsOrRefusesWhole) {
   config = reconfigure("/beacon_follow", {{"follow_colour", "green"}}, {{"turn_gain", 2.5}});
   EXPECT_EQ(strIn(config, "follow_colour"), "blue");
   EXPECT_EQ(doubleIn(config, "turn_gain"), 1.5);
-  spinFor(0.5);  // rosout is asynchronous
-  EXPECT_GE(logsFrom("/beacon_follow", "rejected reconfiguration"), 1);
+  EXPECT_GE(waitForLogs("/beacon_follow", "rejected reconfiguration"), 1);
 
   // An unknown colour name is refused the same way.
   config = reconfigure("/beacon_follow", {{"follow_colour", "purple"}}, {});
