@@ -9,6 +9,8 @@ set +u  # ROS's setup scripts read unset variables
 # shellcheck disable=SC1091
 source "$build/devel/setup.bash"
 set -u
+# The suites run side by side on every core: numpy's OpenBLAS threads would only spin.
+export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
 rm -rf "$build/test_results" "$build/catkin/test_results"
 mkdir -p "$build/test_results"
 status=0
