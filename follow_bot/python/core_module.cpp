@@ -150,6 +150,7 @@ void bindLineDetector(py::module_& m) {
 
   py::class_<BandMeasurement> measurement(m, "BandMeasurement");
   measurement.def_readwrite("min_yellowness", &BandMeasurement::min_yellowness)
+      .def_readwrite("block_min_yellowness", &BandMeasurement::block_min_yellowness)
       .def_readwrite("found", &BandMeasurement::found)
       .def_readwrite("pixel_count", &BandMeasurement::pixel_count)
       .def_readwrite("centroid_x", &BandMeasurement::centroid_x)

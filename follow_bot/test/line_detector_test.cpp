@@ -766,6 +766,39 @@ TEST(LineDetector, FindsTheLineInAHardShadow) {
   }
 }
 
+// A shadow over the line and little else, on a lit warm floor near the paint's hue (wood: HSV
+// (13, 153, 150), yellowness 40): the band's floor is mostly lit, so its median yellowness is
+// the lit wood's and the paint in the shadow (34 % of the light, tinted as by a clear sky:
+// yellowness ~52) is under the band's threshold (~80). Each column block judged in its own
+// light (its threshold scaled by the block's light over the band's, at most halved: ~40), the
+// line is found; the wood in the same shadow (yellowness ~8) is not.
+TEST(LineDetector, FindsTheLineInAShadowOverItAlone) {
+  const cv::Scalar wood(60, 100, 150);
+  const cv::Scalar clear_sky_tint(1.3, 1.0, 0.85);
+  const int line_x = 250, width = 50;
+  const double centre = line_x + (width - 1) / 2.0;
+  const cv::Rect shadow(line_x - 60, 0, width + 120, 480);  // columns 190-359: blocks 1 and 2
+  cv::Mat frame(480, 640, CV_8UC3, wood);
+  frame(cv::Range::all(), cv::Range(line_x, line_x + width)).setTo(kPaint);
+  relight(frame, shadow, 0.34, clear_sky_tint);
+  addSensorNoise(frame, 4);
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_GE(band.min_yellowness, 52 + 20);  // far above the shadowed paint's yellowness
+  ASSERT_EQ(band.block_min_yellowness.size(), 5u);
+  for (int block : {0, 3, 4}) EXPECT_EQ(band.block_min_yellowness[block], band.min_yellowness);
+  for (int block : {1, 2}) {
+    EXPECT_EQ(band.block_min_yellowness[block], (band.min_yellowness + 1) / 2) << block;
+  }
+  EXPECT_TRUE(band.found);
+  EXPECT_NEAR(band.centroid_x, centre, 1.0);
+  EXPECT_GE(band.pixel_count, 20 * width * 9 / 10);
+  // The wood alone, lit and in the same shadow, is no line.
+  cv::Mat bare(480, 640, CV_8UC3, wood);
+  relight(bare, shadow, 0.34, clear_sky_tint);
+  addSensorNoise(bare, 5);
+  EXPECT_EQ(LineDetector().detect(bare).band.pixel_count, 0);
+}
+
 // Bare floor is no line whatever the light does to it: under a warm cast that puts the whole
 // floor in the colour box; a glare patch on a dark warm floor, in the box where the floor is not;
 // the edge of a hard shadow on the cast floor, its lit side in the box. The lecture's pipeline

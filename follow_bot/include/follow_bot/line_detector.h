@@ -149,7 +149,10 @@ struct LineDetectorConfig {
   // floor's median and MAD are sampled from the band itself every frame (every 4th pixel of
   // every 4th row), so a cast, glare or shadow that moves the whole floor moves the threshold
   // with it, while paint, even in a shadow at 30 % of the light, stays far yellower than the
-  // floor around it. 0: no floor test, the colour box alone.
+  // floor around it. A shadow over part of the band dims the paint in it and the floor alike:
+  // each 128-column block's threshold is scaled by its light (its floor's lower-quartile
+  // brightness, max(B, G, R), over the band's), down to half, never up. 0: no floor test, the
+  // colour box alone.
   int floor_margin = Defaults::floor_margin;
   double floor_mads = Defaults::floor_mads;
   // The width gate: a blob whose mean width across its direction on the floor (its extent in
@@ -176,8 +179,10 @@ struct LineDetectorConfig {
 std::string validate(const LineDetectorConfig& config);
 
 struct BandMeasurement {
-  // The band's fitted floor test: line pixels have min(R, G) - B >= this (0 without the test).
+  // The band's fitted floor test: line pixels have min(R, G) - B >= this (0 without the test)
+  // where the band is lit, and >= block_min_yellowness[x / 128] in the column block of x.
   int min_yellowness = 0;
+  std::vector<int> block_min_yellowness;
   // pixel_count >= min_pixels and, where the band holds several blobs, one of those measured
   // alone has min_pixels.
   bool found = false;
@@ -338,9 +343,13 @@ class LineDetector {
 
   BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band,
                               std::optional<double> expected_x) const;
-  // The floor test's threshold for rows [row_begin, row_end): LineDetectorConfig::floor_margin.
-  // 0 without the test; above 255 nothing passes.
-  int minYellowness(const cv::Mat& bgr, int row_begin, int row_end) const;
+  // The floor test for rows [row_begin, row_end) (LineDetectorConfig::floor_margin): the band's
+  // threshold (0 without the test; above 255 nothing passes) and each column block's.
+  struct FloorTest {
+    int min_yellowness = 0;
+    std::vector<int> block_min_yellowness;
+  };
+  FloorTest floorTest(const cv::Mat& bgr, int row_begin, int row_end) const;
   // Whether a blob of these row extents is too wide on the floor to be the line
   // (LineDetectorConfig::line_width_factor); false where its width cannot be measured.
   struct FloorScale;

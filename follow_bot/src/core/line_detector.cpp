@@ -100,18 +100,31 @@ std::string checkFrame(const cv::Mat& bgr) {
   return "";
 }
 
+// The floor test's column blocks, each judged in its own light (LineDetectorConfig::
+// floor_margin): wide enough that the line (~50 columns at the band) fills well under a quarter
+// of one, a whole number of SIMD chunks.
+constexpr int kShadeBlockColumns = 128;
+static_assert(kShadeBlockColumns % 16 == 0, "a SIMD chunk of 16 pixels lies in one block");
+// A block's light is the lower quartile of its brightness: floor, unless paint covers three
+// quarters of it (paint is brighter than floor, so it could only raise the estimate).
+constexpr int kShadeQuantilePercent = 25;
+// The deepest shade a block's threshold is scaled to, as a divisor of the band's light: the
+// margin stands clear of the floor's texture, which dims with the light, but also of sensor
+// noise, which does not.
+constexpr int kDeepestShadeDivisor = 2;
+
 // Calls visit(x, is_line) for the pixels of one BGR row that might be line pixels: in the box
-// with yellowness >= min_yellowness (in [0, 255]). Every pixel not visited is certainly not
-// one. Sixteen pixels at a time are screened in SIMD with HsvBox::Screen and the yellowness,
-// exactly (most floor pixels fail); the survivors get the exact box test, whose verdict is
-// passed on rather than branched on, because near the box edges it is a coin toss the branch
-// predictor would lose.
+// with yellowness >= the floor test's threshold for x's column block (each in [0, 255]). Every
+// pixel not visited is certainly not one. Sixteen pixels at a time are screened in SIMD with
+// HsvBox::Screen and the yellowness, exactly (most floor pixels fail); the survivors get the exact
+// box test, whose verdict is passed on rather than branched on, because near the box edges it is a
+// coin toss the branch predictor would lose.
 template <typename Visit>
-void visitCandidates(const HsvBox& box, int min_yellowness, const uchar* bgr_row, int cols,
-                     Visit&& visit) {
+void visitCandidates(const HsvBox& box, const std::vector<int>& block_min_yellowness,
+                     const uchar* bgr_row, int cols, Visit&& visit) {
   int x = 0;
 #if CV_SIMD128
-  const cv::v_uint8x16 min_yellow = cv::v_setall_u8(static_cast<uchar>(min_yellowness));
+  cv::v_uint8x16 min_yellow;
   const HsvBox::Screen& screen = box.screen();
   const cv::v_uint8x16 min_value = cv::v_setall_u8(static_cast<uchar>(screen.min_value));
   const cv::v_uint8x16 max_value = cv::v_setall_u8(static_cast<uchar>(screen.max_value));
@@ -139,6 +152,10 @@ void visitCandidates(const HsvBox& box, int min_yellowness, const uchar* bgr_row
     return n + ((n < cv::v_setzero_s16()) & (c4 + c2));
   };
   for (; x + 16 <= cols; x += 16) {
+    if (x % kShadeBlockColumns == 0) {
+      min_yellow =
+          cv::v_setall_u8(static_cast<uchar>(block_min_yellowness[x / kShadeBlockColumns]));
+    }
     cv::v_uint8x16 b, g, r;
     cv::v_load_deinterleave(bgr_row + 3 * x, b, g, r);
     const cv::v_uint8x16 max = cv::v_max(cv::v_max(b, g), r);
@@ -175,7 +192,8 @@ void visitCandidates(const HsvBox& box, int min_yellowness, const uchar* bgr_row
 #endif
   for (const uchar* pixel = bgr_row + 3 * x; x < cols; ++x, pixel += 3) {
     visit(x, box.contains(pixel[0], pixel[1], pixel[2]) &
-                 (yellowness(pixel[0], pixel[1], pixel[2]) >= min_yellowness));
+                 (yellowness(pixel[0], pixel[1], pixel[2]) >=
+                  block_min_yellowness[x / kShadeBlockColumns]));
   }
 }
 
@@ -546,7 +564,9 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   result.distance_m = placement.distance_m;
   result.clamped = placement.clamped;
   const int band_rows = result.row_end - result.row_begin;
-  result.min_yellowness = minYellowness(bgr, result.row_begin, result.row_end);
+  FloorTest floor = floorTest(bgr, result.row_begin, result.row_end);
+  result.min_yellowness = floor.min_yellowness;
+  result.block_min_yellowness = std::move(floor.block_min_yellowness);
   if (result.min_yellowness > 255) return result;  // the floor is as yellow as paint gets
 
   // Each row's line pixel columns, kept in case a blob has to be picked out of the band. Every
@@ -565,7 +585,7 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   for (int y = result.row_begin; y < result.row_end; ++y) {
     RowSums row;
     if (may_pick) {
-      visitCandidates(box_, result.min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, result.block_min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) {
                         row.add(x, is_line);
                         columns[end] = x;
@@ -573,7 +593,7 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
                       });
       row_starts[y - result.row_begin + 1] = end;
     } else {
-      visitCandidates(box_, result.min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, result.block_min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) { row.add(x, is_line); });
     }
     sums.addRow(y, row, bgr.cols);
@@ -603,19 +623,33 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   return result;
 }
 
-int LineDetector::minYellowness(const cv::Mat& bgr, int row_begin, int row_end) const {
-  if (config_.floor_margin == 0) return 0;
+LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begin,
+                                                int row_end) const {
+  const int blocks = (bgr.cols + kShadeBlockColumns - 1) / kShadeBlockColumns;
+  FloorTest test;
+  test.block_min_yellowness.assign(blocks, 0);
+  if (config_.floor_margin == 0) return test;
   std::array<int, 256> histogram{};
+  // Each block's samples as (max(B, G, R), yellowness), in a stretch of its own of one
+  // allocation.
+  const int rows_sampled = (row_end - row_begin + kFloorSampleStride - 1) / kFloorSampleStride;
+  const int block_capacity = std::max(rows_sampled, 0) * (kShadeBlockColumns / kFloorSampleStride);
+  std::vector<std::pair<uchar, uchar>> block_samples(static_cast<size_t>(blocks) * block_capacity);
+  std::vector<int> block_sizes(blocks, 0);
   int samples = 0;
   for (int y = row_begin; y < row_end; y += kFloorSampleStride) {
     const uchar* row = bgr.ptr<uchar>(y);
     for (int x = 0; x < bgr.cols; x += kFloorSampleStride) {
       const uchar* pixel = row + 3 * x;
-      ++histogram[yellowness(pixel[0], pixel[1], pixel[2])];
+      const int yellow = yellowness(pixel[0], pixel[1], pixel[2]);
+      ++histogram[yellow];
+      const int block = x / kShadeBlockColumns;
+      block_samples[block * block_capacity + block_sizes[block]++] = {
+          std::max({pixel[0], pixel[1], pixel[2]}), static_cast<uchar>(yellow)};
       ++samples;
     }
   }
-  if (samples == 0) return 0;
+  if (samples == 0) return test;
   const int half = (samples + 1) / 2;
   int median = 0;
   for (int below = histogram[0]; below < half;) below += histogram[++median];
@@ -626,8 +660,55 @@ int LineDetector::minYellowness(const cv::Mat& bgr, int row_begin, int row_end) 
     within += (median - mad >= 0 ? histogram[median - mad] : 0) +
               (median + mad <= 255 ? histogram[median + mad] : 0);
   }
-  return median +
-         std::max(config_.floor_margin, static_cast<int>(std::ceil(config_.floor_mads * mad)));
+  const int margin =
+      std::max(config_.floor_margin, static_cast<int>(std::ceil(config_.floor_mads * mad)));
+  test.min_yellowness = median + margin;
+  // Each block's light (the brightness at its lower quartile) and its floor's yellowness in that
+  // light (the median over the darkest quarter); the band's light is the median block's, so
+  // that a shadow over fewer than half the blocks leaves it that of the lit floor.
+  std::vector<int> block_light(blocks), block_floor(blocks);
+  for (int block = 0; block < blocks; ++block) {
+    const auto begin = block_samples.begin() + static_cast<std::ptrdiff_t>(block) * block_capacity;
+    const auto end = begin + block_sizes[block];
+    // Counting, not sorting: a few hundred samples into 256 levels.
+    std::array<int, 256> counts{};
+    for (auto sample = begin; sample != end; ++sample) ++counts[sample->first];
+    int light = 0;
+    for (int below = counts[0]; below <= block_sizes[block] * kShadeQuantilePercent / 100;) {
+      below += counts[++light];
+    }
+    block_light[block] = light;
+    counts.fill(0);
+    int darkest = 0;
+    for (auto sample = begin; sample != end; ++sample) {
+      if (sample->first <= light) {
+        ++counts[sample->second];
+        ++darkest;
+      }
+    }
+    int floor_yellowness = 0;
+    for (int below = counts[0]; below <= darkest / 2;) below += counts[++floor_yellowness];
+    block_floor[block] = floor_yellowness;
+  }
+  std::vector<int> sorted_light = block_light;
+  const auto middle = sorted_light.begin() + blocks / 2;
+  std::nth_element(sorted_light.begin(), middle, sorted_light.end());
+  const int band_light = *middle;
+  if (band_light == 0) {  // a black band: no light to scale by
+    test.block_min_yellowness.assign(blocks, test.min_yellowness);
+    return test;
+  }
+  for (int block = 0; block < blocks; ++block) {
+    const int light = std::clamp(block_light[block], band_light / kDeepestShadeDivisor, band_light);
+    // The band's threshold and the margin over the block's own dark floor, both in the block's
+    // light (rounded up: a block as lit as the band keeps the band's threshold exactly); the
+    // larger, so that a block darker only beside a bright object (a red stop line across the
+    // band) keeps its floor out. Never above the band's: paint filling a block must not raise it.
+    const int scaled = (test.min_yellowness * light + band_light - 1) / band_light;
+    const int own_floor = block_floor[block] + (margin * light + band_light - 1) / band_light;
+    test.block_min_yellowness[block] = std::min(test.min_yellowness, std::max(scaled, own_floor));
+  }
+  return test;
 }
 
 std::optional<LineDetector::FloorScale> LineDetector::floorScale(
@@ -773,11 +854,11 @@ cv::Mat LineDetector::debugMask(const cv::Mat& bgr) const {
   cv::Mat mask(bgr.size(), CV_8UC1, cv::Scalar::all(0));
   auto mark_band = [&](const BandConfig& band) {
     const BandPlacement placement = placeBand(camera_, band, bgr.rows);
-    const int min_yellowness = minYellowness(bgr, placement.row_begin, placement.row_end);
-    if (min_yellowness > 255) return;
+    const FloorTest floor = floorTest(bgr, placement.row_begin, placement.row_end);
+    if (floor.min_yellowness > 255) return;
     for (int y = placement.row_begin; y < placement.row_end; ++y) {
       uchar* mask_row = mask.ptr<uchar>(y);
-      visitCandidates(box_, min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, floor.block_min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) { mask_row[x] = is_line ? 255 : 0; });
     }
   };
