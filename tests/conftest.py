@@ -6,7 +6,12 @@ the terminal from pytest-xdist workers too, where a test's own print does not.""
 import warnings
 from pathlib import Path
 
+import cv2
 import pytest
+
+# The suites run side by side on every core (tools/run_tests.sh): OpenCV's worker threads in a
+# test process would only contend for them. The pixels are the same either way.
+cv2.setNumThreads(1)
 
 
 def pytest_terminal_summary(terminalreporter):
