@@ -35,8 +35,9 @@ import numpy as np
 from follow_bot import core
 from follow_bot.cfg import BeaconChaserConfig
 from harness.apriltag_image import tag_image
+from harness.node_under_test import private_master
 from harness.render import Renderer
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.run_scenario import stop
 from harness.world import package_dir, parse_world
 
 SIGN_IMAGE = package_dir("follow_bot") / "assets" / "parking_sign.png"
@@ -882,68 +883,59 @@ class Dispatch:
 
 
 def run(keys, messages, seed, cases, log_dir: Path, pause: float) -> list[dict]:
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    env.pop("ROS_NAMESPACE", None)
-    os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"])
     log_dir.mkdir(parents=True, exist_ok=True)
-    master = subprocess.Popen(
-        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL,
-        stderr=subprocess.STDOUT,
-    )  # fmt: skip
-    results = []
-    try:
-        if not wait_for_port(port, 20.0):
-            raise RuntimeError("roscore did not start")
+    with private_master() as env:
+        env.pop("ROS_NAMESPACE", None)
+        os.environ.update(ROS_MASTER_URI=env["ROS_MASTER_URI"])
         import rospy
 
         rospy.init_node("fuzzer", anonymous=True, disable_signals=True)
-        from diagnostic_msgs.msg import DiagnosticArray
-
-        diagnostics = Dispatch()
-        rospy.Subscriber("/diagnostics", DiagnosticArray, diagnostics, queue_size=100)
-        batches = (
-            [(case, msgs) for case, msgs in crash_cases().items()] if cases else [("storm", None)]
-        )
-        for run_index, (case, case_msgs) in enumerate(batches):
-            compressed = case in COMPRESSED_CASES
-            nodes = [
-                NodeUnderTest(k, NODES[k], env, log_dir / case, run_index, compressed) for k in keys
-            ]
-            by_status = {node.diagnostics_name(): node for node in nodes}
-            diagnostics.callback = lambda array, nodes=by_status: [
-                nodes[s.name].on_diagnostics({kv.key: kv.value for kv in s.values})
-                for s in array.status
-                if s.name in nodes
-            ]
-            for node in nodes:
-                if not node.wait_connected(30.0):
-                    raise RuntimeError(f"{node.key} did not start (see {node.log.name})")
-            for node in nodes:
-                node.prepare()
-            if case_msgs is not None:
-                for msg in case_msgs:
-                    for node in nodes:
-                        node.send(msg)  # a case's camera_info: its fate not predicted
-                    time.sleep(0.1)
-                    for node in nodes:
-                        node.keep_capturing()
-            else:
-                storm_all(nodes, messages, seed, pause)
-            time.sleep(0.3)
-            # A capture aborts after ~frame_timeout (1 s) without frames: probe it first.
-            for node in sorted(nodes, key=lambda n: not n.spec.capturing):
-                result = node.finish()
-                result["case"] = case
-                results.append(result)
-    finally:
         try:
-            import rospy
-
+            return run_batches(keys, messages, seed, cases, log_dir, pause, env)
+        finally:
             rospy.signal_shutdown("fuzzing done")
-        except ImportError:
-            pass
-        stop(master)
+
+
+def run_batches(keys, messages, seed, cases, log_dir: Path, pause: float, env: dict) -> list[dict]:
+    """The storm (or each crash case) on fresh copies of the nodes, under a running master."""
+    import rospy
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    results = []
+    diagnostics = Dispatch()
+    rospy.Subscriber("/diagnostics", DiagnosticArray, diagnostics, queue_size=100)
+    batches = [(case, msgs) for case, msgs in crash_cases().items()] if cases else [("storm", None)]
+    for run_index, (case, case_msgs) in enumerate(batches):
+        compressed = case in COMPRESSED_CASES
+        nodes = [
+            NodeUnderTest(k, NODES[k], env, log_dir / case, run_index, compressed) for k in keys
+        ]
+        by_status = {node.diagnostics_name(): node for node in nodes}
+        diagnostics.callback = lambda array, nodes=by_status: [
+            nodes[s.name].on_diagnostics({kv.key: kv.value for kv in s.values})
+            for s in array.status
+            if s.name in nodes
+        ]
+        for node in nodes:
+            if not node.wait_connected(30.0):
+                raise RuntimeError(f"{node.key} did not start (see {node.log.name})")
+        for node in nodes:
+            node.prepare()
+        if case_msgs is not None:
+            for msg in case_msgs:
+                for node in nodes:
+                    node.send(msg)  # a case's camera_info: its fate not predicted
+                time.sleep(0.1)
+                for node in nodes:
+                    node.keep_capturing()
+        else:
+            storm_all(nodes, messages, seed, pause)
+        time.sleep(0.3)
+        # A capture aborts after ~frame_timeout (1 s) without frames: probe it first.
+        for node in sorted(nodes, key=lambda n: not n.spec.capturing):
+            result = node.finish()
+            result["case"] = case
+            results.append(result)
     return results
 
 

@@ -41,6 +41,7 @@ from tqdm import tqdm
 from harness.camera import Camera
 from harness.contact_sheet import DEFAULT_FRAMES, write_contact_sheet
 from harness.marker_map import load_frames, plot_markers
+from harness.node_cli import BEHAVIOUR_GONE
 from harness.plot import plot_run
 from harness.report import format_value, headline, headline_text, write_summary
 from harness.scenario import (
@@ -52,7 +53,6 @@ from harness.scenario import (
     metrics,
     scenario_world,
 )
-from harness.sim_node import BEHAVIOUR_GONE
 from harness.world import WorldError
 
 MASTER_START_TIMEOUT = 20.0  # wall s
@@ -94,12 +94,13 @@ def parent_pid(pid: int) -> int:
         return int(stat.read().rsplit(")", 1)[1].split()[1])
 
 
-def master_is_ours(port: int, roscore: subprocess.Popen) -> bool:
-    """The master answering on `port` is the rosmaster our roscore started (not another run's:
-    a free port can be taken by another process between the probe and roscore's bind)."""
+def master_is_ours(port: int, process: subprocess.Popen) -> bool:
+    """The master answering on `port` is `process` (a rosmaster) or the rosmaster it started (a
+    roscore), not another run's: a free port can be taken by another process between the probe
+    and the master's bind."""
     try:
         code, _, pid = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}").getPid("/run_scenario")
-        return code == 1 and parent_pid(pid) == roscore.pid
+        return code == 1 and process.pid in (pid, parent_pid(pid))
     except (OSError, xmlrpc.client.Error, ValueError, IndexError):
         return False
 

@@ -51,15 +51,12 @@ from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from follow_bot_msgs.msg import BehaviourStatus
 from follow_bot_msgs.ros_image import bgr_to_jpeg_msg, bgr_to_msg
 from harness.debug_video import DebugView
-from harness.node_cli import parse_node_command_line
+from harness.node_cli import BEHAVIOUR_GONE, parse_node_command_line
 from harness.robot_preset import GENERIC, camera_topics, robot_world
 from harness.scenario import ScenarioError, load_scenario, scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
 from harness.world import WorldError, load_world, resolve_world_path
-
-# The exit code of a lockstep run ended because the behaviour under test is not running.
-BEHAVIOUR_GONE = 3
 
 # The robot description's root (harness/robot_description.py): a base driver's odom child frame.
 BASE_FRAME = "base_footprint"
