@@ -631,7 +631,7 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
   if (config_.floor_margin == 0) return test;
   std::array<int, 256> histogram{};
   // Each block's samples as (max(B, G, R), yellowness), in a stretch of its own of one
-  // allocation.
+  // allocation. Every block has some whenever the band has: its first column is sampled.
   const int rows_sampled = (row_end - row_begin + kFloorSampleStride - 1) / kFloorSampleStride;
   const int block_capacity = std::max(rows_sampled, 0) * (kShadeBlockColumns / kFloorSampleStride);
   std::vector<std::pair<uchar, uchar>> block_samples(static_cast<size_t>(blocks) * block_capacity);
