@@ -102,15 +102,29 @@ def in_shadow(frame, brightness, tint=SKY_SHADOW_TINT):
     return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
 
 
-def measure(realdata, detector_config, name, first_row, shadow=1.0, tint=SKY_SHADOW_TINT):
+def in_stripe_of_shadow(frame, centre, brightness, tint=BLUER_SHADOW_TINT, half_width=80):
+    """The frame with a shadow `half_width` columns either side of column `centre` alone."""
+    shaded = frame.copy()
+    columns = slice(max(centre - half_width, 0), centre + half_width)
+    shaded[:, columns] = in_shadow(frame[:, columns], brightness, tint)
+    return shaded
+
+
+def measure(
+    realdata, detector_config, name, first_row, shadow=1.0, tint=SKY_SHADOW_TINT, stripe=None
+):
     """The band at first_row of the frame; below 1, `shadow` is the light left on it (in_shadow,
-    with `tint`)."""
+    with `tint`), or, given `stripe` (a column), on the stripe round that column alone."""
     camera = nominal_camera()
     config = detector_config()
     config.band = core.BandConfig(distance_m=band_distance(camera, first_row), rows=BAND_ROWS)
     frame = load(realdata, name)
     if shadow < 1:
-        frame = in_shadow(frame, shadow, tint)
+        frame = (
+            in_shadow(frame, shadow, tint)
+            if stripe is None
+            else in_stripe_of_shadow(frame, stripe, shadow, tint)
+        )
     band = core.LineDetector(config, camera).detect(frame).band
     assert band.row_begin == first_row
     return band
@@ -188,11 +202,13 @@ def test_the_floor_test_not_a_v_floor_keeps_dark_floor_out(realdata):
 LINES = sum(label is not None for label in LABELS.values())
 
 
-def count_in_shadow(realdata, detector_config, brightness, tint=SKY_SHADOW_TINT):
-    """Over the labelled bands in a shadow: (lines found, bands without a line left without one)."""
+def count_in_shadow(realdata, detector_config, brightness, tint=SKY_SHADOW_TINT, stripe=False):
+    """Over the labelled bands in a shadow: (lines found, bands without a line left without one).
+    `stripe`: the shadow over a stripe round the label (the middle column without one) alone."""
     hits = clean = 0
     for (name, first_row), label in LABELS.items():
-        band = measure(realdata, detector_config, name, first_row, brightness, tint)
+        column = (320 if label is None else label) if stripe else None
+        band = measure(realdata, detector_config, name, first_row, brightness, tint, column)
         if label is None:
             clean += not band.found
         else:
@@ -239,14 +255,6 @@ def test_the_line_in_a_bluer_shadow_needs_the_wider_hue_window(realdata, record_
     assert found["h_max 34", 0.55] <= 14 and found["h_max 34", 0.3] <= 6, found
 
 
-def in_stripe_of_shadow(frame, centre, brightness, tint=BLUER_SHADOW_TINT, half_width=80):
-    """The frame with a shadow `half_width` columns either side of column `centre` alone."""
-    shaded = frame.copy()
-    columns = slice(max(centre - half_width, 0), centre + half_width)
-    shaded[:, columns] = in_shadow(frame[:, columns], brightness, tint)
-    return shaded
-
-
 def test_the_line_in_a_shadow_over_it_alone_on_the_real_frames(realdata, record_property):
     """Every labelled band under a bluer shadow 160 columns wide centred on its label (or on the
     middle column where there is no line), the floor beside it lit: the band's floor statistic
@@ -254,21 +262,11 @@ def test_the_line_in_a_shadow_over_it_alone_on_the_real_frames(realdata, record_
     24 lines at 55 % and 30 % of the light (5 of 24 at 30 % with one threshold for the band);
     the misses are paint whose tinted hue leaves the colour box, or a lit warm cast elsewhere in
     the band; a line where there is none, never."""
-    camera = nominal_camera()
     found = {}
     for brightness in (0.55, 0.3):
-        hits = clean = 0
-        for (name, first_row), label in LABELS.items():
-            config = core.LineDetectorConfig()
-            config.band = core.BandConfig(
-                distance_m=band_distance(camera, first_row), rows=BAND_ROWS
-            )
-            frame = in_stripe_of_shadow(load(realdata, name), label or 320, brightness)
-            band = core.LineDetector(config, camera).detect(frame).band
-            if label is None:
-                clean += not band.found
-            else:
-                hits += verdict(band, label)
+        hits, clean = count_in_shadow(
+            realdata, core.LineDetectorConfig, brightness, BLUER_SHADOW_TINT, stripe=True
+        )
         assert clean == len(LABELS) - LINES, brightness
         found[brightness] = hits
         record_property(f"shadow stripe {brightness}", f"{hits}/{LINES} lines")
