@@ -15,14 +15,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from xmlrpc.client import ServerProxy
 
-from harness.run_scenario import (
-    MASTER_START_ATTEMPTS,
-    MASTER_START_TIMEOUT,
-    free_port,
-    master_is_ours,
-    stop,
-    wait_for_port,
-)
+from harness.run_scenario import MASTER_START_ATTEMPTS, start_master, stop
 
 
 @contextmanager
@@ -32,18 +25,16 @@ def private_master(sim_time: bool = False) -> Iterator[dict[str, str]]:
     rosmaster alone, as roscore starts it but without roslaunch and the rosout node (nodes publish
     /rosout all the same): ~0.45 s of CPU to start against roscore's ~1.6. A port another program
     takes between the probe and the master's bind is tried again with another."""
-    for _ in range(MASTER_START_ATTEMPTS):
-        port = free_port()
-        env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-        master = subprocess.Popen(
-            ["rosmaster", "--core", "-p", str(port)], env=env,
-            stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
-        )  # fmt: skip
-        if wait_for_port(port, MASTER_START_TIMEOUT, master) and master_is_ours(port, master):
-            break
-        stop(master)
-    else:
+    env = dict(os.environ)
+    started = start_master(
+        ["rosmaster", "--core"], env,
+        lambda command: subprocess.Popen(
+            command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
+        ),
+    )  # fmt: skip
+    if started is None:
         raise RuntimeError(f"no ROS master started in {MASTER_START_ATTEMPTS} attempts")
+    master, _ = started
     try:
         if sim_time:
             ServerProxy(env["ROS_MASTER_URI"]).setParam("/private_master", "/use_sim_time", True)

@@ -29,6 +29,7 @@ import sys
 import threading
 import time
 import xmlrpc.client
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 from xml.etree import ElementTree
@@ -103,6 +104,22 @@ def master_is_ours(port: int, process: subprocess.Popen) -> bool:
         return code == 1 and process.pid in (pid, parent_pid(pid))
     except (OSError, xmlrpc.client.Error, ValueError, IndexError):
         return False
+
+
+def start_master(
+    command: list[str], env: dict[str, str], popen: Callable[[list[str]], subprocess.Popen]
+) -> tuple[subprocess.Popen, int] | None:
+    """`command` (roscore, or rosmaster --core) started by `popen` with -p on a free port, and
+    that port; `env`'s ROS_MASTER_URI points at it. A port another program takes between the
+    probe and the master's bind is tried again with another; None when every attempt failed."""
+    for _ in range(MASTER_START_ATTEMPTS):
+        port = free_port()
+        env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
+        master = popen([*command, "-p", str(port)])
+        if wait_for_port(port, MASTER_START_TIMEOUT, master) and master_is_ours(port, master):
+            return master, port
+        stop(master)
+    return None
 
 
 def wait_for_node(port: int, node: str, timeout: float, process: subprocess.Popen) -> bool:
@@ -235,16 +252,10 @@ def run_one(
 
         roscore = None
         try:
-            for _ in range(MASTER_START_ATTEMPTS):
-                port = free_port()
-                env["ROS_MASTER_URI"] = f"http://127.0.0.1:{port}"
-                roscore = start(["roscore", "-p", str(port)])
-                up = wait_for_port(port, MASTER_START_TIMEOUT, roscore)
-                if up and master_is_ours(port, roscore):
-                    break
-                stop(roscore)
-            else:
+            started_master = start_master(["roscore"], env, start)
+            if started_master is None:
                 raise RuntimeError(f"roscore did not start (see {out}/ros.log)")
+            roscore, port = started_master
             subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
             # The description's start-up (roslaunch, the URDF script) done before the run's:
             # its load must not slow the first lockstep frames.
