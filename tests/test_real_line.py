@@ -102,29 +102,44 @@ def in_shadow(frame, brightness, tint=SKY_SHADOW_TINT):
     return np.clip(np.rint(frame.astype(np.float32) * gains), 0, 255).astype(np.uint8)
 
 
-def in_stripe_of_shadow(frame, centre, brightness, tint=BLUER_SHADOW_TINT, half_width=80):
-    """The frame with a shadow `half_width` columns either side of column `centre` alone."""
+def in_shadow_over(frame, columns, brightness, tint=BLUER_SHADOW_TINT):
+    """The frame with a shadow over `columns` (a slice) alone."""
     shaded = frame.copy()
-    columns = slice(max(centre - half_width, 0), centre + half_width)
     shaded[:, columns] = in_shadow(frame[:, columns], brightness, tint)
     return shaded
 
 
+def in_stripe_of_shadow(frame, centre, brightness, tint=BLUER_SHADOW_TINT, half_width=80):
+    """The frame with a shadow `half_width` columns either side of column `centre` alone."""
+    return in_shadow_over(
+        frame, slice(max(centre - half_width, 0), centre + half_width), brightness, tint
+    )
+
+
 def measure(
-    realdata, detector_config, name, first_row, shadow=1.0, tint=SKY_SHADOW_TINT, stripe=None
+    realdata,
+    detector_config,
+    name,
+    first_row,
+    shadow=1.0,
+    tint=SKY_SHADOW_TINT,
+    stripe=None,
+    columns=None,
 ):
     """The band at first_row of the frame; below 1, `shadow` is the light left on it (in_shadow,
-    with `tint`), or, given `stripe` (a column), on the stripe round that column alone."""
+    with `tint`), or, given `stripe` (a column), on the stripe round that column alone, or, given
+    `columns` (a slice), on those columns alone."""
     camera = nominal_camera()
     config = detector_config()
     config.band = core.BandConfig(distance_m=band_distance(camera, first_row), rows=BAND_ROWS)
     frame = load(realdata, name)
     if shadow < 1:
-        frame = (
-            in_shadow(frame, shadow, tint)
-            if stripe is None
-            else in_stripe_of_shadow(frame, stripe, shadow, tint)
-        )
+        if stripe is not None:
+            frame = in_stripe_of_shadow(frame, stripe, shadow, tint)
+        elif columns is not None:
+            frame = in_shadow_over(frame, columns, shadow, tint)
+        else:
+            frame = in_shadow(frame, shadow, tint)
     band = core.LineDetector(config, camera).detect(frame).band
     assert band.row_begin == first_row
     return band
@@ -160,7 +175,7 @@ def lecture_config():
     config.upper = core.HsvColor(h=30, s=255, v=255)
     config.floor_margin = 0
     config.line_width_factor = 0.0
-    config.blob_chroma_fraction = 0.0
+    config.blob_saturation_fraction = 0.0
     return config
 
 
@@ -202,13 +217,18 @@ def test_the_floor_test_not_a_v_floor_keeps_dark_floor_out(realdata):
 LINES = sum(label is not None for label in LABELS.values())
 
 
-def count_in_shadow(realdata, detector_config, brightness, tint=SKY_SHADOW_TINT, stripe=False):
+def count_in_shadow(
+    realdata, detector_config, brightness, tint=SKY_SHADOW_TINT, stripe=False, columns=None
+):
     """Over the labelled bands in a shadow: (lines found, bands without a line left without one).
-    `stripe`: the shadow over a stripe round the label (the middle column without one) alone."""
+    `stripe`: the shadow over a stripe round the label (the middle column without one) alone;
+    `columns`: over those columns alone."""
     hits = clean = 0
     for (name, first_row), label in LABELS.items():
         column = (320 if label is None else label) if stripe else None
-        band = measure(realdata, detector_config, name, first_row, brightness, tint, column)
+        band = measure(
+            realdata, detector_config, name, first_row, brightness, tint, column, columns
+        )
         if label is None:
             clean += not band.found
         else:
@@ -258,10 +278,11 @@ def test_the_line_in_a_bluer_shadow_needs_the_wider_hue_window(realdata, record_
 def test_the_line_in_a_shadow_over_it_alone_on_the_real_frames(realdata, record_property):
     """Every labelled band under a bluer shadow 160 columns wide centred on its label (or on the
     middle column where there is no line), the floor beside it lit: the band's floor statistic
-    is the lit floor's, so each column block is judged in its own light. Measured: 16 and 15 of
-    24 lines at 55 % and 30 % of the light (5 of 24 at 30 % with one threshold for the band);
-    the misses are paint whose tinted hue leaves the colour box, or a lit warm cast elsewhere in
-    the band; a line where there is none, never."""
+    is the lit floor's, so each column block is judged in its own light. Measured: 20 and 18 of
+    24 lines at 55 % and 30 % of the light (5 of 24 at 30 % with one threshold for the band, 16
+    and 15 with blobs compared by chroma, which the shadow dims, instead of saturation); the
+    misses are paint whose tinted hue leaves the colour box, or a lit warm cast elsewhere in the
+    band; a line where there is none, never."""
     found = {}
     for brightness in (0.55, 0.3):
         hits, clean = count_in_shadow(
@@ -270,4 +291,38 @@ def test_the_line_in_a_shadow_over_it_alone_on_the_real_frames(realdata, record_
         assert clean == len(LABELS) - LINES, brightness
         found[brightness] = hits
         record_property(f"shadow stripe {brightness}", f"{hits}/{LINES} lines")
-    assert found[0.55] >= 15 and found[0.3] >= 14, found
+    assert found[0.55] >= 20 and found[0.3] >= 18, found
+
+
+# A shadow's edge across every labelled band: the shadow over these columns, the rest lit.
+SHADOW_EDGES = {
+    "left half": slice(0, 320),
+    "right half": slice(320, None),
+    "left 70 %": slice(0, 448),
+    "right 70 %": slice(192, None),
+}
+# Lines found at 55 % and 30 % of the light (measured).
+LINES_BESIDE_AN_EDGE = {
+    "left half": (21, 12),
+    "right half": (24, 24),
+    "left 70 %": (20, 11),
+    "right 70 %": (23, 22),
+}
+
+
+def test_the_lit_floor_beside_a_shadow_edge_is_no_line_on_the_real_frames(
+    realdata, record_property
+):
+    """Every labelled band with a bluer shadow's edge across it: where the shadow covers most of
+    the band, the lit floor beside the edge is judged by a lit block's own floor test, so it is
+    never a line where there is none (before that rule, a false line in five of these cases:
+    pic5 rows 450 or 226nightCoordination_0016). Most lines lost are in the shadow at 30 %, with
+    a warm cast's glare left in the lit part."""
+    for edge, columns in SHADOW_EDGES.items():
+        for brightness, least in zip((0.55, 0.3), LINES_BESIDE_AN_EDGE[edge]):
+            hits, clean = count_in_shadow(
+                realdata, core.LineDetectorConfig, brightness, BLUER_SHADOW_TINT, columns=columns
+            )
+            record_property(f"shadow {edge} {brightness}", f"{hits}/{LINES} lines, {clean} clean")
+            assert clean == len(LABELS) - LINES, (edge, brightness)
+            assert hits >= least, (edge, brightness, hits)

@@ -96,7 +96,7 @@ int main() {
   follow_bot::LineDetectorConfig every_pixel;
   every_pixel.lower.v = 100;
   every_pixel.upper.h = 30;
-  every_pixel.blob_chroma_fraction = 0.0;
+  every_pixel.blob_saturation_fraction = 0.0;
   every_pixel.floor_margin = 0;
   every_pixel.line_width_factor = 0.0;
   const follow_bot::LineDetector lecture_equivalent(every_pixel);

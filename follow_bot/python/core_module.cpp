@@ -134,7 +134,7 @@ void bindLineDetector(py::module_& m) {
       .def_readwrite("look_ahead", &LineDetectorConfig::look_ahead)
       .def_readwrite("min_pixels", &LineDetectorConfig::min_pixels)
       .def_readwrite("max_width_fraction", &LineDetectorConfig::max_width_fraction)
-      .def_readwrite("blob_chroma_fraction", &LineDetectorConfig::blob_chroma_fraction)
+      .def_readwrite("blob_saturation_fraction", &LineDetectorConfig::blob_saturation_fraction)
       .def_readwrite("floor_margin", &LineDetectorConfig::floor_margin)
       .def_readwrite("floor_mads", &LineDetectorConfig::floor_mads)
       .def_readwrite("line_width_m", &LineDetectorConfig::line_width_m)

@@ -151,8 +151,10 @@ struct LineDetectorConfig {
   // with it, while paint, even in a shadow at 30 % of the light, stays far yellower than the
   // floor around it. A shadow over part of the band dims the paint in it and the floor alike:
   // each 128-column block's threshold is scaled by its light (its floor's lower-quartile
-  // brightness, max(B, G, R), over the band's), down to half, never up. 0: no floor test, the
-  // colour box alone.
+  // brightness, max(B, G, R), over the band's), down to half, never up. Where a block is lit
+  // (1.5 times the band's light) while most of the band is in shadow, the lit floor beside the
+  // shadow's edge is kept out by that block's own threshold, scaled to each pixel's brightness.
+  // 0: no floor test, the colour box alone.
   int floor_margin = Defaults::floor_margin;
   double floor_mads = Defaults::floor_mads;
   // The width gate: a blob whose mean width across its direction on the floor (its extent in
@@ -164,12 +166,13 @@ struct LineDetectorConfig {
   double line_width_m = Defaults::line_width;
   double line_width_factor = Defaults::line_width_factor;
   // Without a previous sighting, a band whose line pixels form several blobs leaves out the
-  // blobs whose mean chroma (max - min channel) is below this fraction of the most saturated
-  // blob's of at least min_pixels: on real floors a colour cast or glare lets patches of floor,
-  // or a tinted white line, into the colour box, but they are far less saturated than paint
-  // (on the labelled real frames every fraction from 0.6 to 0.9 separates them). 0: every line
-  // pixel counts, as the lecture.
-  double blob_chroma_fraction = Defaults::blob_chroma_fraction;
+  // blobs whose mean saturation (HSV's S: (max - min channel) / max) is below this fraction of
+  // the most saturated blob's of at least min_pixels: on real floors a colour cast or glare lets
+  // patches of floor, or a tinted white line, into the colour box, but they are far less
+  // saturated than paint. Saturation, not chroma, because it does not change with the light:
+  // paint in a shadow is less chromatic than lit wood floor beside it, but far more saturated.
+  // 0: every line pixel counts, as the lecture.
+  double blob_saturation_fraction = Defaults::blob_saturation_fraction;
   // Confidence falls once the line's mean width per row exceeds this fraction of the image
   // width (a frame full of yellow is not a line); see BandMeasurement::confidence.
   double max_width_fraction = 0.35;
@@ -263,7 +266,7 @@ class LineDetector {
   // nearest the previous centroid column (of those the width gate keeps) is measured, so a
   // line-coloured patch beside the line (tape, a reflection) does not pull the centroid. With one
   // blob, or no previous sighting, the result is detect(bgr)'s, bit for bit (which leaves out
-  // weakly saturated blobs: LineDetectorConfig::blob_chroma_fraction).
+  // weakly saturated blobs: LineDetectorConfig::blob_saturation_fraction).
   LineMeasurement detect(const cv::Mat& bgr, const LineMeasurement& previous) const;
 
   // The lecture's mask: CV_8UC1 of the frame's size, 255 on line pixels inside the band(s) (the
@@ -344,10 +347,19 @@ class LineDetector {
   BandMeasurement measureBand(const cv::Mat& bgr, const BandConfig& band,
                               std::optional<double> expected_x) const;
   // The floor test for rows [row_begin, row_end) (LineDetectorConfig::floor_margin): the band's
-  // threshold (0 without the test; above 255 nothing passes) and each column block's.
+  // threshold (0 without the test; above 255 nothing passes), each column block's, and, where a
+  // block is lit while the band is in shadow, that block's threshold (lit_threshold at
+  // lit_light) scaled to each pixel's brightness, up to lit_light.
   struct FloorTest {
     int min_yellowness = 0;
     std::vector<int> block_min_yellowness;
+    int lit_light = 0;  // 0: no lit block
+    int lit_threshold = 0;
+    // Pixels dimmer than three quarters of lit_light are not of the lit floor.
+    bool passesAtItsBrightness(int brightness, int yellow) const {
+      return 4 * brightness < 3 * lit_light ||
+             yellow * lit_light >= lit_threshold * std::min(brightness, lit_light);
+    }
   };
   FloorTest floorTest(const cv::Mat& bgr, int row_begin, int row_end) const;
   // Whether a blob of these row extents is too wide on the floor to be the line
@@ -362,7 +374,7 @@ class LineDetector {
   // whose columns come nearest it, the largest, so a speck of noise beside the line does not win.
   static std::vector<bool> nearestBlob(const Blobs& blobs, const std::vector<bool>& candidates,
                                        double expected_x);
-  // The `candidates` blob_chroma_fraction keeps.
+  // The `candidates` blob_saturation_fraction keeps.
   std::vector<bool> saturatedBlobs(const Blobs& blobs, const std::vector<bool>& candidates) const;
   void fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const;
 

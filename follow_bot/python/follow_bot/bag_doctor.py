@@ -751,7 +751,7 @@ def fit_beacon_colours(samples, centres) -> dict | None:
 DETECTOR_PARAMS = ("h_min", "h_max", "s_min", "s_max", "v_min", "v_max", "band_distance",
                    "band_rows", "look_ahead", "look_ahead_distance", "min_pixels",
                    "floor_margin", "floor_mads", "line_width", "line_width_factor",
-                   "blob_chroma_fraction")  # fmt: skip
+                   "blob_saturation_fraction")  # fmt: skip
 STEERING_PARAMS = ("mode", "max_linear", "min_linear", "max_angular")
 PD_PARAMS = ("kp", "kd", "taper", "look_ahead_weight")
 PATH_PARAMS = ("heading_gain", "lateral_gain")
@@ -785,7 +785,7 @@ def detector_config_with(core, params: dict):
     config.floor_mads = params.get("floor_mads", config.floor_mads)
     config.line_width_m = params.get("line_width", config.line_width_m)
     config.line_width_factor = params.get("line_width_factor", config.line_width_factor)
-    config.blob_chroma_fraction = params.get("blob_chroma_fraction", config.blob_chroma_fraction)
+    config.blob_saturation_fraction = params.get("blob_saturation_fraction", config.blob_saturation_fraction)
     return config
 
 

@@ -112,6 +112,19 @@ constexpr int kShadeQuantilePercent = 25;
 // margin stands clear of the floor's texture, which dims with the light, but also of sensor
 // noise, which does not.
 constexpr int kDeepestShadeDivisor = 2;
+// A block this much brighter than the band is lit where the band is in shadow.
+constexpr struct {
+  int num, den;
+} kLitBlockFactor{3, 2};
+// 255 * 65536 / brightness: a pixel's chroma (<= brightness) over its brightness in 255ths, its
+// HSV saturation, is (chroma * kReciprocals[brightness]) >> 16, without a division.
+const std::array<int, 256> kReciprocals = [] {
+  std::array<int, 256> reciprocals{};
+  for (int brightness = 1; brightness < 256; ++brightness) {
+    reciprocals[brightness] = 255 * 65536 / brightness;
+  }
+  return reciprocals;
+}();
 
 // Calls visit(x, is_line) for the pixels of one BGR row that might be line pixels: in the box
 // with yellowness >= the floor test's threshold for x's column block (each in [0, 255]). Every
@@ -119,9 +132,10 @@ constexpr int kDeepestShadeDivisor = 2;
 // HsvBox::Screen and the yellowness, exactly (most floor pixels fail); the survivors get the exact
 // box test, whose verdict is passed on rather than branched on, because near the box edges it is a
 // coin toss the branch predictor would lose.
-template <typename Visit>
-void visitCandidates(const HsvBox& box, const std::vector<int>& block_min_yellowness,
-                     const uchar* bgr_row, int cols, Visit&& visit) {
+template <typename FloorTest, typename Visit>
+void visitCandidates(const HsvBox& box, const FloorTest& floor, const uchar* bgr_row, int cols,
+                     Visit&& visit) {
+  const std::vector<int>& block_min_yellowness = floor.block_min_yellowness;
   int x = 0;
 #if CV_SIMD128
   cv::v_uint8x16 min_yellow;
@@ -177,23 +191,27 @@ void visitCandidates(const HsvBox& box, const std::vector<int>& block_min_yellow
     cv::v_expand(r, r_low, r_high);
     alignas(16) uchar max_lanes[16];
     alignas(16) uchar chroma_lanes[16];
+    alignas(16) uchar yellow_lanes[16];
     alignas(16) short numerator_lanes[16];
     cv::v_store_aligned(max_lanes, max);
     cv::v_store_aligned(chroma_lanes, chroma);
+    cv::v_store_aligned(yellow_lanes, yellow);
     cv::v_store_aligned(numerator_lanes, hue_numerator(b_low, g_low, r_low, max_low, chroma_low));
     cv::v_store_aligned(numerator_lanes + 8,
                         hue_numerator(b_high, g_high, r_high, max_high, chroma_high));
     for (; bits != 0; bits &= bits - 1) {
       const int lane = ::trailingZeros32(bits);
       visit(x + lane,
-            box.containsDecomposed(max_lanes[lane], chroma_lanes[lane], numerator_lanes[lane]));
+            box.containsDecomposed(max_lanes[lane], chroma_lanes[lane], numerator_lanes[lane]) &
+                floor.passesAtItsBrightness(max_lanes[lane], yellow_lanes[lane]));
     }
   }
 #endif
   for (const uchar* pixel = bgr_row + 3 * x; x < cols; ++x, pixel += 3) {
+    const int yellow = yellowness(pixel[0], pixel[1], pixel[2]);
     visit(x, box.contains(pixel[0], pixel[1], pixel[2]) &
-                 (yellowness(pixel[0], pixel[1], pixel[2]) >=
-                  block_min_yellowness[x / kShadeBlockColumns]));
+                 (yellow >= block_min_yellowness[x / kShadeBlockColumns]) &
+                 floor.passesAtItsBrightness(std::max({pixel[0], pixel[1], pixel[2]}), yellow));
   }
 }
 
@@ -402,8 +420,8 @@ std::string validate(const LineDetectorConfig& config) {
   } else if (!std::isfinite(config.max_width_fraction) || config.max_width_fraction <= 0.0 ||
              config.max_width_fraction > 1.0) {
     message << "max_width_fraction must be in (0, 1], got " << config.max_width_fraction;
-  } else if (!(config.blob_chroma_fraction >= 0.0 && config.blob_chroma_fraction <= 1.0)) {
-    message << "blob_chroma_fraction must be in [0, 1], got " << config.blob_chroma_fraction;
+  } else if (!(config.blob_saturation_fraction >= 0.0 && config.blob_saturation_fraction <= 1.0)) {
+    message << "blob_saturation_fraction must be in [0, 1], got " << config.blob_saturation_fraction;
   } else if (!inside(config.floor_margin, 0, 255)) {
     message << "floor_margin must be in [0, 255], got " << config.floor_margin;
   } else if (!(config.floor_mads >= 0.0 && std::isfinite(config.floor_mads))) {
@@ -457,13 +475,13 @@ struct LineDetector::Blobs {
     int row = 0;              // image row
     int begin = 0, end = 0;   // columns [begin, end]
     int blob = 0;             // index of its root run until resolved, then of its blob
-    std::int64_t chroma = 0;  // sum over its pixels of max - min channel
+    std::int64_t saturation = 0;  // sum over its pixels of HSV's S
   };
   std::vector<Run> runs;  // by row, then column
   int row_begin = 0, row_end = 0, image_width = 0;
   int count = 0;  // blobs
   std::vector<int> area, first_column, last_column;
-  std::vector<std::int64_t> chroma;
+  std::vector<std::int64_t> saturation;
   std::vector<RowExtents> extents;
 
   // `columns`: each row's line pixels in increasing order, rows [row_begin, row_end) after each
@@ -484,14 +502,16 @@ struct LineDetector::Blobs {
       for (int i = row_starts[y - row_begin]; i < row_starts[y - row_begin + 1]; ++i) {
         const int x = columns[i];
         const uchar* p = pixels + 3 * x;
-        const int pixel_chroma = std::max({p[0], p[1], p[2]}) - std::min({p[0], p[1], p[2]});
+        const uchar brightness = std::max({p[0], p[1], p[2]});
+        const int pixel_saturation =
+            ((brightness - std::min({p[0], p[1], p[2]})) * kReciprocals[brightness]) >> 16;
         if (runs.size() > row_first && runs.back().end == x - 1) {
           runs.back().end = x;
         } else {
           runs.push_back({y, x, x, static_cast<int>(runs.size()), 0});
           parent.push_back(runs.back().blob);
         }
-        runs.back().chroma += pixel_chroma;
+        runs.back().saturation += pixel_saturation;
       }
       // Runs of adjacent rows touch when their columns overlap or meet at a corner.
       for (size_t above = previous_row_first, here = row_first;
@@ -513,7 +533,7 @@ struct LineDetector::Blobs {
         area.push_back(0);
         first_column.push_back(runs[i].begin);
         last_column.push_back(runs[i].end);
-        chroma.push_back(0);
+        saturation.push_back(0);
         extents.emplace_back();
       }
       Run& run = runs[i];
@@ -521,7 +541,7 @@ struct LineDetector::Blobs {
       area[run.blob] += run.end - run.begin + 1;
       first_column[run.blob] = std::min(first_column[run.blob], run.begin);
       last_column[run.blob] = std::max(last_column[run.blob], run.end);
-      chroma[run.blob] += run.chroma;
+      saturation[run.blob] += run.saturation;
     }
     // Each blob's extent in each of its rows: its runs in a row come in column order.
     std::vector<int> open_row(count, -1), open_first(count), open_last(count);
@@ -564,16 +584,16 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   result.distance_m = placement.distance_m;
   result.clamped = placement.clamped;
   const int band_rows = result.row_end - result.row_begin;
-  FloorTest floor = floorTest(bgr, result.row_begin, result.row_end);
+  const FloorTest floor = floorTest(bgr, result.row_begin, result.row_end);
   result.min_yellowness = floor.min_yellowness;
-  result.block_min_yellowness = std::move(floor.block_min_yellowness);
+  result.block_min_yellowness = floor.block_min_yellowness;
   if (result.min_yellowness > 255) return result;  // the floor is as yellow as paint gets
 
   // Each row's line pixel columns, kept in case a blob has to be picked out of the band. Every
   // candidate is written and only line pixels advance the end: no branch on the coin toss.
   const bool gate_widths = config_.line_width_factor > 0.0;
   const bool may_pick =
-      (expected_x || config_.blob_chroma_fraction > 0.0 || gate_widths) && band_rows > 0;
+      (expected_x || config_.blob_saturation_fraction > 0.0 || gate_widths) && band_rows > 0;
   // Left uninitialised: only the entries below `end` are ever read.
   const std::unique_ptr<int[]> columns(may_pick ? new int[static_cast<size_t>(band_rows) * bgr.cols]
                                                 : nullptr);
@@ -585,7 +605,7 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   for (int y = result.row_begin; y < result.row_end; ++y) {
     RowSums row;
     if (may_pick) {
-      visitCandidates(box_, result.block_min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, floor, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) {
                         row.add(x, is_line);
                         columns[end] = x;
@@ -593,7 +613,7 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
                       });
       row_starts[y - result.row_begin + 1] = end;
     } else {
-      visitCandidates(box_, result.block_min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, floor, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) { row.add(x, is_line); });
     }
     sums.addRow(y, row, bgr.cols);
@@ -642,10 +662,11 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
     for (int x = 0; x < bgr.cols; x += kFloorSampleStride) {
       const uchar* pixel = row + 3 * x;
       const int yellow = yellowness(pixel[0], pixel[1], pixel[2]);
+      const uchar brightness = std::max({pixel[0], pixel[1], pixel[2]});
       ++histogram[yellow];
       const int block = x / kShadeBlockColumns;
-      block_samples[block * block_capacity + block_sizes[block]++] = {
-          std::max({pixel[0], pixel[1], pixel[2]}), static_cast<uchar>(yellow)};
+      block_samples[block * block_capacity + block_sizes[block]++] = {brightness,
+                                                                      static_cast<uchar>(yellow)};
       ++samples;
     }
   }
@@ -707,6 +728,20 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
     const int scaled = (test.min_yellowness * light + band_light - 1) / band_light;
     const int own_floor = block_floor[block] + (margin * light + band_light - 1) / band_light;
     test.block_min_yellowness[block] = std::min(test.min_yellowness, std::max(scaled, own_floor));
+    // A lit block in a band mostly in shadow: its floor's test, in proportion to each pixel's
+    // brightness, holds over the whole band. A block is lit floor when its floor is no yellower
+    // than the band's would be in its light, by the margin: paint filling it is far yellower.
+    // Of several, the most lenient.
+    const int lit_threshold = block_floor[block] + margin;
+    const bool lit = kLitBlockFactor.den * block_light[block] >= kLitBlockFactor.num * band_light;
+    const bool floor_in_more_light =
+        block_floor[block] * band_light <= median * block_light[block] + margin * band_light;
+    if (lit && floor_in_more_light &&
+        (test.lit_light == 0 ||
+         lit_threshold * test.lit_light < test.lit_threshold * block_light[block])) {
+      test.lit_light = block_light[block];
+      test.lit_threshold = lit_threshold;
+    }
   }
   return test;
 }
@@ -767,21 +802,21 @@ std::vector<bool> LineDetector::nearestBlob(const Blobs& blobs, const std::vecto
 
 std::vector<bool> LineDetector::saturatedBlobs(const Blobs& blobs,
                                                const std::vector<bool>& candidates) const {
-  std::vector<double> mean_chroma(blobs.count);
+  std::vector<double> mean_saturation(blobs.count);
   double strongest = 0.0, strongest_line_sized = 0.0;
   for (int blob = 0; blob < blobs.count; ++blob) {
     if (!candidates[blob]) continue;
-    mean_chroma[blob] = static_cast<double>(blobs.chroma[blob]) / blobs.area[blob];
-    strongest = std::max(strongest, mean_chroma[blob]);
+    mean_saturation[blob] = static_cast<double>(blobs.saturation[blob]) / blobs.area[blob];
+    strongest = std::max(strongest, mean_saturation[blob]);
     if (blobs.area[blob] >= config_.min_pixels) {
-      strongest_line_sized = std::max(strongest_line_sized, mean_chroma[blob]);
+      strongest_line_sized = std::max(strongest_line_sized, mean_saturation[blob]);
     }
   }
-  const double bar = config_.blob_chroma_fraction *
+  const double bar = config_.blob_saturation_fraction *
                      (strongest_line_sized > 0.0 ? strongest_line_sized : strongest);
   std::vector<bool> kept(blobs.count);
   for (int blob = 0; blob < blobs.count; ++blob) {
-    kept[blob] = candidates[blob] && mean_chroma[blob] >= bar;
+    kept[blob] = candidates[blob] && mean_saturation[blob] >= bar;
   }
   return kept;
 }
@@ -858,7 +893,7 @@ cv::Mat LineDetector::debugMask(const cv::Mat& bgr) const {
     if (floor.min_yellowness > 255) return;
     for (int y = placement.row_begin; y < placement.row_end; ++y) {
       uchar* mask_row = mask.ptr<uchar>(y);
-      visitCandidates(box_, floor.block_min_yellowness, bgr.ptr<uchar>(y), bgr.cols,
+      visitCandidates(box_, floor, bgr.ptr<uchar>(y), bgr.cols,
                       [&](int x, bool is_line) { mask_row[x] = is_line ? 255 : 0; });
     }
   };

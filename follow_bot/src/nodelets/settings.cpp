@@ -37,7 +37,7 @@ FollowerSettings followerSettings(const FollowerConfig& cfg) {
   detector.look_ahead_enabled = cfg.look_ahead;
   detector.look_ahead = {cfg.look_ahead_distance, cfg.band_rows};
   detector.min_pixels = cfg.min_pixels;
-  detector.blob_chroma_fraction = cfg.blob_chroma_fraction;
+  detector.blob_saturation_fraction = cfg.blob_saturation_fraction;
   detector.floor_margin = cfg.floor_margin;
   detector.floor_mads = cfg.floor_mads;
   detector.line_width_m = cfg.line_width;
