@@ -19,7 +19,6 @@ import time
 import numpy as np
 import pytest
 
-from follow_bot import core
 from harness.node_under_test import private_master, run_with_client
 
 GREY = (110, 115, 120)  # BGR floor: saturation 21, below every colour's floor
@@ -35,6 +34,28 @@ def known_frame() -> np.ndarray:
     for colour, (rows, cols) in RECTS.values():
         frame[rows, cols] = colour
     return frame
+
+
+def patch_mask(*names: str) -> np.ndarray:
+    """What the lab nodes' colour masks hold on known_frame(), from its geometry alone: each
+    named patch but for its four corner pixels. The patches' pure colours are inside their
+    colour boxes and the grey floor outside every one; the mask's 3x3 elliptical opening is a
+    cross, which removes exactly a rectangle's corners, and its 5x5 closing adds none back."""
+    mask = np.zeros((480, 640), bool)
+    for name in names:
+        rows, cols = RECTS[name][1]
+        mask[rows, cols] = True
+        for y in (rows.start, rows.stop - 1):
+            for x in (cols.start, cols.stop - 1):
+                mask[y, x] = False
+    return mask
+
+
+def boundary(mask: np.ndarray) -> np.ndarray:
+    """The pixels of `mask` with a 4-neighbour outside it."""
+    inner = mask.copy()
+    inner[1:-1, 1:-1] &= mask[:-2, 1:-1] & mask[2:, 1:-1] & mask[1:-1, :-2] & mask[1:-1, 2:]
+    return mask & ~inner
 
 
 def patch_frame(colour, size=40) -> np.ndarray:
@@ -111,19 +132,13 @@ def test_colour_filter_keeps_exactly_the_green_patch(tmp_path):
     # Inside it, the green itself, but for the corners the mask's opening (ellipse) rounds off.
     assert np.count_nonzero(image[inside].any(axis=1)) >= inside.sum() - 40
     assert tuple(image[140, 320]) == (0, 200, 0) and tuple(image[100, 300]) == (0, 200, 0)
-    # Pixel for pixel the binding's own mask, as the node is built on it.
-    green = core.ColourBlobDetector().mask(frame, "green") > 0
-    assert np.array_equal(image, kept(frame, green))
+    assert np.array_equal(image, kept(frame, patch_mask("green")))
 
 
 def test_three_colours_keeps_red_green_and_blue(tmp_path):
     _, image = play("three_colours", tmp_path)
     frame = known_frame()
-    detector = core.ColourBlobDetector()
-    union = np.zeros(frame.shape[:2], bool)
-    for name in ("red", "green", "blue"):
-        union |= detector.mask(frame, name) > 0
-    assert np.array_equal(image, kept(frame, union))
+    assert np.array_equal(image, kept(frame, patch_mask("red", "green", "blue")))
     assert tuple(image[140, 140]) == (0, 0, 200) and tuple(image[140, 320]) == (0, 200, 0)
     assert tuple(image[20, 20]) == (0, 0, 0)  # the grey floor is gone
     big = np.zeros(frame.shape[:2], bool)
@@ -138,20 +153,18 @@ def test_colour_flags_raise_for_big_contours_only(tmp_path):
     assert (flags["red"]["flag"], flags["green"]["flag"], flags["blue"]["flag"]) == (
         True, True, False,
     )  # fmt: skip
-    # An 80x120 px patch: its contour through the edge pixels' centres encloses 79 x 119 px^2,
-    # less the corners the mask's opening rounds off; the centroid at its centre.
+    # An 80x120 px patch without its corner pixels (patch_mask): its contour through the edge
+    # pixels' centres encloses 79 x 119 px^2 less a half-pixel triangle at each corner; the
+    # centroid at its centre. The 10x10 px blue patch (9 x 9 - 2) is below min_area (100 px^2):
+    # no blob, no area.
     for name, (x, y) in (("red", (139.5, 139.5)), ("green", (319.5, 139.5))):
-        assert 79 * 119 - 40 <= flags[name]["area"] <= 79 * 119
+        assert flags[name]["area"] == 79 * 119 - 2
         assert flags[name]["centroid"] == pytest.approx([x, y], abs=0.01)
-    assert flags["blue"]["area"] <= 9 * 9  # 10x10 px: below min_area (100 px^2)
-    blobs = core.ColourBlobDetector(core.ColourBlobConfig(roundness_tolerance=0.0)).detect(
-        known_frame()
-    )
-    assert {b.name: b.area for b in blobs.colours} == {n: f["area"] for n, f in flags.items()}
-    # The flagged contours drawn in white, nothing else changed.
+    assert flags["blue"]["area"] == 0
+    # The flagged contours drawn in white over the patches' edge pixels, nothing else changed.
     changed = np.any(image != known_frame(), axis=2)
     assert np.all(image[changed] == 255)
-    assert changed.sum() == sum(len(b.contour) for b in blobs.colours if b.found)
+    assert np.array_equal(changed, boundary(patch_mask("red", "green")))
 
 
 def test_lab_nodes_answer_help_with_both_pythons():

@@ -319,7 +319,7 @@ def test_the_lit_floor_beside_a_shadow_edge_is_no_line_on_the_real_frames(
     pic5 rows 450 or 226nightCoordination_0016). Most lines lost are in the shadow at 30 %, with
     a warm cast's glare left in the lit part."""
     for edge, columns in SHADOW_EDGES.items():
-        for brightness, least in zip((0.55, 0.3), LINES_BESIDE_AN_EDGE[edge]):
+        for brightness, least in zip((0.55, 0.3), LINES_BESIDE_AN_EDGE[edge], strict=True):
             hits, clean = count_in_shadow(
                 realdata, core.LineDetectorConfig, brightness, BLUER_SHADOW_TINT, columns=columns
             )
