@@ -375,7 +375,8 @@ class LineDetector {
   static std::vector<bool> nearestBlob(const Blobs& blobs, const std::vector<bool>& candidates,
                                        double expected_x);
   // The `candidates` blob_saturation_fraction keeps.
-  std::vector<bool> saturatedBlobs(const Blobs& blobs, const std::vector<bool>& candidates) const;
+  std::vector<bool> saturatedBlobs(const cv::Mat& bgr, const Blobs& blobs,
+                                   const std::vector<bool>& candidates) const;
   void fillBand(const BandSums& sums, int image_width, BandMeasurement* result) const;
 
   LineDetectorConfig config_;

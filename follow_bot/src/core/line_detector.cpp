@@ -475,13 +475,11 @@ struct LineDetector::Blobs {
     int row = 0;              // image row
     int begin = 0, end = 0;   // columns [begin, end]
     int blob = 0;             // index of its root run until resolved, then of its blob
-    std::int64_t saturation = 0;  // sum over its pixels of HSV's S
   };
   std::vector<Run> runs;  // by row, then column
   int row_begin = 0, row_end = 0, image_width = 0;
   int count = 0;  // blobs
   std::vector<int> area, first_column, last_column;
-  std::vector<std::int64_t> saturation;
   std::vector<RowExtents> extents;
 
   // `columns`: each row's line pixels in increasing order, rows [row_begin, row_end) after each
@@ -498,20 +496,15 @@ struct LineDetector::Blobs {
     size_t previous_row_first = 0;  // the previous row's first run
     for (int y = row_begin; y < row_end; ++y) {
       const size_t row_first = runs.size();
-      const uchar* pixels = bgr.ptr<uchar>(y);
-      for (int i = row_starts[y - row_begin]; i < row_starts[y - row_begin + 1]; ++i) {
-        const int x = columns[i];
-        const uchar* p = pixels + 3 * x;
-        const uchar brightness = std::max({p[0], p[1], p[2]});
-        const int pixel_saturation =
-            ((brightness - std::min({p[0], p[1], p[2]})) * kReciprocals[brightness]) >> 16;
-        if (runs.size() > row_first && runs.back().end == x - 1) {
-          runs.back().end = x;
-        } else {
-          runs.push_back({y, x, x, static_cast<int>(runs.size()), 0});
-          parent.push_back(runs.back().blob);
-        }
-        runs.back().saturation += pixel_saturation;
+      // Each stretch of consecutive columns is a run.
+      const int* column = columns + row_starts[y - row_begin];
+      const int* const row_end_column = columns + row_starts[y - row_begin + 1];
+      while (column != row_end_column) {
+        const int begin = *column;
+        int end = begin;
+        while (++column != row_end_column && *column == end + 1) ++end;
+        runs.push_back({y, begin, end, static_cast<int>(runs.size())});
+        parent.push_back(runs.back().blob);
       }
       // Runs of adjacent rows touch when their columns overlap or meet at a corner.
       for (size_t above = previous_row_first, here = row_first;
@@ -533,7 +526,6 @@ struct LineDetector::Blobs {
         area.push_back(0);
         first_column.push_back(runs[i].begin);
         last_column.push_back(runs[i].end);
-        saturation.push_back(0);
         extents.emplace_back();
       }
       Run& run = runs[i];
@@ -541,7 +533,6 @@ struct LineDetector::Blobs {
       area[run.blob] += run.end - run.begin + 1;
       first_column[run.blob] = std::min(first_column[run.blob], run.begin);
       last_column[run.blob] = std::max(last_column[run.blob], run.end);
-      saturation[run.blob] += run.saturation;
     }
     // Each blob's extent in each of its rows: its runs in a row come in column order.
     std::vector<int> open_row(count, -1), open_first(count), open_last(count);
@@ -557,6 +548,22 @@ struct LineDetector::Blobs {
       open_last[run.blob] = run.end;
     }
     for (int blob = 0; blob < count; ++blob) close_row(blob);
+  }
+
+  // Each blob's sum over its pixels of HSV's S, in 255ths.
+  std::vector<std::int64_t> saturationSums(const cv::Mat& bgr) const {
+    std::vector<std::int64_t> sums(count, 0);
+    for (const Run& run : runs) {
+      const uchar* pixel = bgr.ptr<uchar>(run.row) + 3 * run.begin;
+      std::int64_t sum = 0;
+      for (int x = run.begin; x <= run.end; ++x, pixel += 3) {
+        const uchar brightness = std::max({pixel[0], pixel[1], pixel[2]});
+        sum += ((brightness - std::min({pixel[0], pixel[1], pixel[2]})) *
+                kReciprocals[brightness]) >> 16;
+      }
+      sums[run.blob] += sum;
+    }
+    return sums;
   }
 
   // The band's sums over the pixels of the kept blobs.
@@ -627,7 +634,7 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
       candidates[blob] = !tooWide(blobs.extents[blob], scale);
     }
     const std::vector<bool> kept = expected_x ? nearestBlob(blobs, candidates, *expected_x)
-                                              : saturatedBlobs(blobs, candidates);
+                                              : saturatedBlobs(bgr, blobs, candidates);
     int largest = 0;
     for (int blob = 0; blob < blobs.count; ++blob) {
       largest = std::max(largest, kept[blob] ? blobs.area[blob] : 0);
@@ -650,26 +657,34 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
   test.block_min_yellowness.assign(blocks, 0);
   if (config_.floor_margin == 0) return test;
   std::array<int, 256> histogram{};
-  // Each block's samples as (max(B, G, R), yellowness), in a stretch of its own of one
+  // Each block's samples' max(B, G, R) and yellowness, in stretches of their own of one
   // allocation. Every block has some whenever the band has: its first column is sampled.
   const int rows_sampled = (row_end - row_begin + kFloorSampleStride - 1) / kFloorSampleStride;
   const int block_capacity = std::max(rows_sampled, 0) * (kShadeBlockColumns / kFloorSampleStride);
-  std::vector<std::pair<uchar, uchar>> block_samples(static_cast<size_t>(blocks) * block_capacity);
+  const size_t capacity = static_cast<size_t>(blocks) * block_capacity;
+  const std::unique_ptr<uchar[]> sample_lights(new uchar[capacity]);
+  const std::unique_ptr<uchar[]> sample_yellows(new uchar[capacity]);
   std::vector<int> block_sizes(blocks, 0);
-  int samples = 0;
   for (int y = row_begin; y < row_end; y += kFloorSampleStride) {
     const uchar* row = bgr.ptr<uchar>(y);
-    for (int x = 0; x < bgr.cols; x += kFloorSampleStride) {
-      const uchar* pixel = row + 3 * x;
-      const int yellow = yellowness(pixel[0], pixel[1], pixel[2]);
-      const uchar brightness = std::max({pixel[0], pixel[1], pixel[2]});
-      ++histogram[yellow];
-      const int block = x / kShadeBlockColumns;
-      block_samples[block * block_capacity + block_sizes[block]++] = {brightness,
-                                                                      static_cast<uchar>(yellow)};
-      ++samples;
+    for (int block = 0; block < blocks; ++block) {
+      const size_t first = static_cast<size_t>(block) * block_capacity + block_sizes[block];
+      uchar* lights = sample_lights.get() + first;
+      uchar* yellows = sample_yellows.get() + first;
+      const int end = std::min((block + 1) * kShadeBlockColumns, bgr.cols);
+      int taken = 0;
+      for (int x = block * kShadeBlockColumns; x < end; x += kFloorSampleStride, ++taken) {
+        const uchar* pixel = row + 3 * x;
+        const int yellow = yellowness(pixel[0], pixel[1], pixel[2]);
+        ++histogram[yellow];
+        lights[taken] = std::max({pixel[0], pixel[1], pixel[2]});
+        yellows[taken] = static_cast<uchar>(yellow);
+      }
+      block_sizes[block] += taken;
     }
   }
+  int samples = 0;
+  for (int size : block_sizes) samples += size;
   if (samples == 0) return test;
   const int half = (samples + 1) / 2;
   int median = 0;
@@ -689,23 +704,24 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
   // that a shadow over fewer than half the blocks leaves it that of the lit floor.
   std::vector<int> block_light(blocks), block_floor(blocks);
   for (int block = 0; block < blocks; ++block) {
-    const auto begin = block_samples.begin() + static_cast<std::ptrdiff_t>(block) * block_capacity;
-    const auto end = begin + block_sizes[block];
+    const size_t first = static_cast<size_t>(block) * block_capacity;
+    const uchar* lights = sample_lights.get() + first;
+    const uchar* yellows = sample_yellows.get() + first;
+    const int size = block_sizes[block];
     // Counting, not sorting: a few hundred samples into 256 levels.
     std::array<int, 256> counts{};
-    for (auto sample = begin; sample != end; ++sample) ++counts[sample->first];
+    for (int i = 0; i < size; ++i) ++counts[lights[i]];
     int light = 0;
-    for (int below = counts[0]; below <= block_sizes[block] * kShadeQuantilePercent / 100;) {
+    for (int below = counts[0]; below <= size * kShadeQuantilePercent / 100;) {
       below += counts[++light];
     }
     block_light[block] = light;
     counts.fill(0);
     int darkest = 0;
-    for (auto sample = begin; sample != end; ++sample) {
-      if (sample->first <= light) {
-        ++counts[sample->second];
-        ++darkest;
-      }
+    for (int i = 0; i < size; ++i) {
+      const bool dark = lights[i] <= light;
+      counts[yellows[i]] += dark;
+      darkest += dark;
     }
     int floor_yellowness = 0;
     for (int below = counts[0]; below <= darkest / 2;) below += counts[++floor_yellowness];
@@ -800,13 +816,14 @@ std::vector<bool> LineDetector::nearestBlob(const Blobs& blobs, const std::vecto
   return kept;
 }
 
-std::vector<bool> LineDetector::saturatedBlobs(const Blobs& blobs,
+std::vector<bool> LineDetector::saturatedBlobs(const cv::Mat& bgr, const Blobs& blobs,
                                                const std::vector<bool>& candidates) const {
+  const std::vector<std::int64_t> saturation = blobs.saturationSums(bgr);
   std::vector<double> mean_saturation(blobs.count);
   double strongest = 0.0, strongest_line_sized = 0.0;
   for (int blob = 0; blob < blobs.count; ++blob) {
     if (!candidates[blob]) continue;
-    mean_saturation[blob] = static_cast<double>(blobs.saturation[blob]) / blobs.area[blob];
+    mean_saturation[blob] = static_cast<double>(saturation[blob]) / blobs.area[blob];
     strongest = std::max(strongest, mean_saturation[blob]);
     if (blobs.area[blob] >= config_.min_pixels) {
       strongest_line_sized = std::max(strongest_line_sized, mean_saturation[blob]);
