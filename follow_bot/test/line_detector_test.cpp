@@ -804,10 +804,10 @@ TEST(LineDetector, FindsTheLineInAShadowOverItAlone) {
 // A hard shadow (half the light, sky-tinted) whose edge runs along the line's right side, the
 // line in it (yellowness ~86), lit wood floor beyond (HSV (13, 150, 210), yellowness 84): the
 // shadow covers three quarters of the band (columns 0-479), so the band's light and median
-// yellowness are the shadow's, whose threshold (~80) the lit wood clears. Joined to the line, it made one blob too wide to be the
-// line, and the line was lost. A lit block whose floor is the band's floor in more light sets
-// the test for every pixel about as bright as it: its own floor's threshold, so the lit wood
-// stays out.
+// yellowness are the shadow's, whose threshold (~80) the lit wood clears. Joined to the line, it
+// made one blob too wide to be the line, and the line was lost. A lit block whose floor is the
+// band's floor in more light sets the test for every pixel about as bright as it: its own floor's
+// threshold, so the lit wood stays out.
 TEST(LineDetector, KeepsTheLitFloorBesideAShadowOut) {
   const cv::Scalar wood(87, 171, 210);
   const int line_x = 430, width = 50, edge = line_x + width;

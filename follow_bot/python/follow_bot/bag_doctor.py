@@ -785,7 +785,9 @@ def detector_config_with(core, params: dict):
     config.floor_mads = params.get("floor_mads", config.floor_mads)
     config.line_width_m = params.get("line_width", config.line_width_m)
     config.line_width_factor = params.get("line_width_factor", config.line_width_factor)
-    config.blob_saturation_fraction = params.get("blob_saturation_fraction", config.blob_saturation_fraction)
+    config.blob_saturation_fraction = params.get(
+        "blob_saturation_fraction", config.blob_saturation_fraction
+    )
     return config
 
 

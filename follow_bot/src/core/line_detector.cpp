@@ -113,9 +113,7 @@ constexpr int kShadeQuantilePercent = 25;
 // noise, which does not.
 constexpr int kDeepestShadeDivisor = 2;
 // A block this much brighter than the band is lit where the band is in shadow.
-constexpr struct {
-  int num, den;
-} kLitBlockFactor{3, 2};
+constexpr struct { int num, den; } kLitBlockFactor{3, 2};
 // 255 * 65536 / brightness: a pixel's chroma (<= brightness) over its brightness in 255ths, its
 // HSV saturation, is (chroma * kReciprocals[brightness]) >> 16, without a division.
 const std::array<int, 256> kReciprocals = [] {
@@ -421,7 +419,8 @@ std::string validate(const LineDetectorConfig& config) {
              config.max_width_fraction > 1.0) {
     message << "max_width_fraction must be in (0, 1], got " << config.max_width_fraction;
   } else if (!(config.blob_saturation_fraction >= 0.0 && config.blob_saturation_fraction <= 1.0)) {
-    message << "blob_saturation_fraction must be in [0, 1], got " << config.blob_saturation_fraction;
+    message << "blob_saturation_fraction must be in [0, 1], got "
+            << config.blob_saturation_fraction;
   } else if (!inside(config.floor_margin, 0, 255)) {
     message << "floor_margin must be in [0, 255], got " << config.floor_margin;
   } else if (!(config.floor_mads >= 0.0 && std::isfinite(config.floor_mads))) {
@@ -472,9 +471,9 @@ struct LineDetector::FloorScale {
 // Line pixels of a band, row by row, grouped into 8-connected blobs.
 struct LineDetector::Blobs {
   struct Run {
-    int row = 0;              // image row
-    int begin = 0, end = 0;   // columns [begin, end]
-    int blob = 0;             // index of its root run until resolved, then of its blob
+    int row = 0;             // image row
+    int begin = 0, end = 0;  // columns [begin, end]
+    int blob = 0;            // index of its root run until resolved, then of its blob
   };
   std::vector<Run> runs;  // by row, then column
   int row_begin = 0, row_end = 0, image_width = 0;
@@ -558,8 +557,9 @@ struct LineDetector::Blobs {
       std::int64_t sum = 0;
       for (int x = run.begin; x <= run.end; ++x, pixel += 3) {
         const uchar brightness = std::max({pixel[0], pixel[1], pixel[2]});
-        sum += ((brightness - std::min({pixel[0], pixel[1], pixel[2]})) *
-                kReciprocals[brightness]) >> 16;
+        sum +=
+            ((brightness - std::min({pixel[0], pixel[1], pixel[2]})) * kReciprocals[brightness]) >>
+            16;
       }
       sums[run.blob] += sum;
     }
@@ -612,12 +612,11 @@ BandMeasurement LineDetector::measureBand(const cv::Mat& bgr, const BandConfig& 
   for (int y = result.row_begin; y < result.row_end; ++y) {
     RowSums row;
     if (may_pick) {
-      visitCandidates(box_, floor, bgr.ptr<uchar>(y), bgr.cols,
-                      [&](int x, bool is_line) {
-                        row.add(x, is_line);
-                        columns[end] = x;
-                        end += is_line ? 1 : 0;
-                      });
+      visitCandidates(box_, floor, bgr.ptr<uchar>(y), bgr.cols, [&](int x, bool is_line) {
+        row.add(x, is_line);
+        columns[end] = x;
+        end += is_line ? 1 : 0;
+      });
       row_starts[y - result.row_begin + 1] = end;
     } else {
       visitCandidates(box_, floor, bgr.ptr<uchar>(y), bgr.cols,
