@@ -13,9 +13,8 @@ import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from xmlrpc.client import ServerProxy
 
-from harness.run_scenario import MASTER_START_ATTEMPTS, start_master, stop
+from harness.run_scenario import MASTER_START_ATTEMPTS, start_master, stop, use_sim_time
 
 
 @contextmanager
@@ -37,7 +36,7 @@ def private_master(sim_time: bool = False) -> Iterator[dict[str, str]]:
     master, _ = started
     try:
         if sim_time:
-            ServerProxy(env["ROS_MASTER_URI"]).setParam("/private_master", "/use_sim_time", True)
+            use_sim_time(env)
         yield env
     finally:
         stop(master)

@@ -122,6 +122,15 @@ def start_master(
     return None
 
 
+def use_sim_time(env: dict[str, str]) -> None:
+    """Sets /use_sim_time on the master `env` points at, by XML-RPC (no rosparam process)."""
+    code, message, _ = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"]).setParam(
+        "/run_scenario", "/use_sim_time", True
+    )
+    if code != 1:
+        raise RuntimeError(f"could not set /use_sim_time: {message}")
+
+
 def wait_for_node(port: int, node: str, timeout: float, process: subprocess.Popen) -> bool:
     """Whether `node` registers with the master on `port` within `timeout` (giving up once
     `process`, the one starting it, exits)."""
@@ -256,7 +265,7 @@ def run_one(
             if started_master is None:
                 raise RuntimeError(f"roscore did not start (see {out}/ros.log)")
             roscore, port = started_master
-            subprocess.run(["rosparam", "set", "/use_sim_time", "true"], env=env, check=True)
+            use_sim_time(env)
             # The description's start-up (roslaunch, the URDF script) done before the run's:
             # its load must not slow the first lockstep frames.
             description = start(description_command(world.camera))
