@@ -655,7 +655,6 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
   FloorTest test;
   test.block_min_yellowness.assign(blocks, 0);
   if (config_.floor_margin == 0) return test;
-  std::array<int, 256> histogram{};
   // Each block's samples' max(B, G, R) and yellowness, in stretches of their own of one
   // allocation. Every block has some whenever the band has: its first column is sampled.
   const int rows_sampled = (row_end - row_begin + kFloorSampleStride - 1) / kFloorSampleStride;
@@ -674,10 +673,8 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
       int taken = 0;
       for (int x = block * kShadeBlockColumns; x < end; x += kFloorSampleStride, ++taken) {
         const uchar* pixel = row + 3 * x;
-        const int yellow = yellowness(pixel[0], pixel[1], pixel[2]);
-        ++histogram[yellow];
         lights[taken] = std::max({pixel[0], pixel[1], pixel[2]});
-        yellows[taken] = static_cast<uchar>(yellow);
+        yellows[taken] = static_cast<uchar>(yellowness(pixel[0], pixel[1], pixel[2]));
       }
       block_sizes[block] += taken;
     }
@@ -685,19 +682,6 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
   int samples = 0;
   for (int size : block_sizes) samples += size;
   if (samples == 0) return test;
-  const int half = (samples + 1) / 2;
-  int median = 0;
-  for (int below = histogram[0]; below < half;) below += histogram[++median];
-  // The median absolute deviation: the smallest d with half the samples within median +- d.
-  int mad = 0;
-  for (int within = histogram[median]; within < half;) {
-    ++mad;
-    within += (median - mad >= 0 ? histogram[median - mad] : 0) +
-              (median + mad <= 255 ? histogram[median + mad] : 0);
-  }
-  const int margin =
-      std::max(config_.floor_margin, static_cast<int>(std::ceil(config_.floor_mads * mad)));
-  test.min_yellowness = median + margin;
   // Each block's light (the brightness at its lower quartile) and its floor's yellowness in that
   // light (the median over the darkest quarter); the band's light is the median block's, so
   // that a shadow over fewer than half the blocks leaves it that of the lit floor.
@@ -730,6 +714,33 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
   const auto middle = sorted_light.begin() + blocks / 2;
   std::nth_element(sorted_light.begin(), middle, sorted_light.end());
   const int band_light = *middle;
+  // The floor's yellowness as it would read in the band's light: each block's samples scaled by
+  // the band's light over the block's, so that lit floor beside a shadow (or shadowed floor in a
+  // lit band) joins one mode and neither the median nor the MAD measures the shadow's contrast.
+  std::array<int, 256> histogram{};
+  for (int block = 0; block < blocks; ++block) {
+    const uchar* yellows = sample_yellows.get() + static_cast<size_t>(block) * block_capacity;
+    const int light = std::max(block_light[block], band_light / kDeepestShadeDivisor);
+    // Fixed point, 8 fractional bits, truncated to whole levels; a block as lit as the band reads
+    // exactly as before, and in a black band every sample does.
+    const int scale = light > 0 ? (band_light << 8) / light : 1 << 8;
+    for (int i = 0; i < block_sizes[block]; ++i) {
+      ++histogram[std::min((yellows[i] * scale) >> 8, 255)];
+    }
+  }
+  const int half = (samples + 1) / 2;
+  int median = 0;
+  for (int below = histogram[0]; below < half;) below += histogram[++median];
+  // The median absolute deviation: the smallest d with half the samples within median +- d.
+  int mad = 0;
+  for (int within = histogram[median]; within < half;) {
+    ++mad;
+    within += (median - mad >= 0 ? histogram[median - mad] : 0) +
+              (median + mad <= 255 ? histogram[median + mad] : 0);
+  }
+  const int margin =
+      std::max(config_.floor_margin, static_cast<int>(std::ceil(config_.floor_mads * mad)));
+  test.min_yellowness = median + margin;
   if (band_light == 0) {  // a black band: no light to scale by
     test.block_min_yellowness.assign(blocks, test.min_yellowness);
     return test;
