@@ -78,7 +78,8 @@ class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
       desired = controller_->update(blobs_, frame.time);
     }
     const BeaconState state = controller_->state();
-    return {desired, steers(state), toString(state)};
+    // Red is a stop signal: the robot is told zero at once, not by the deceleration ramp.
+    return {desired, steers(state), toString(state), state == BeaconState::kStoppedByRed};
   }
 
   void report(const Frame& frame, const Twist2D& sent) override {

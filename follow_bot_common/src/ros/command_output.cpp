@@ -143,7 +143,7 @@ void CommandOutput::reportStatus(diagnostic_updater::DiagnosticStatusWrapper& st
 }
 
 Twist2D CommandOutput::send(const std_msgs::Header& frame, const Twist2D& desired, bool active,
-                            const std::string& state) {
+                            const std::string& state, bool halt) {
   std::lock_guard<std::mutex> lock(mutex_);
   const ros::Time stamp = frameTime(frame);
   // In double seconds: ros::Time's difference throws beyond 2^31 s, and stamps are input.
@@ -157,8 +157,9 @@ Twist2D CommandOutput::send(const std_msgs::Header& frame, const Twist2D& desire
   last_stamp_ = stamp;
   // The limiter runs on every frame, idle or not, so an active behaviour's commands are the
   // same whatever came before; disabled, it holds zero.
-  const bool steering = enabled_ && active;
-  const Twist2D command = limiter_.limit(enabled_ ? desired : Twist2D{}, dt);
+  const bool steering = enabled_ && active && !halt;
+  const Twist2D command =
+      halt ? limiter_.stop() : limiter_.limit(enabled_ ? desired : Twist2D{}, dt);
   const bool zero = command.linear == 0.0 && command.angular == 0.0;
   // Idle: finish the ramp down and send its one zero, then stay off cmd_vel.
   const bool sent = steering || !zero || !quiet_;

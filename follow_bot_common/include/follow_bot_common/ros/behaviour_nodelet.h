@@ -57,11 +57,13 @@ struct Frame {
 };
 
 // A frame's decision (docs/behaviour_contract.md): the desired command before the limits,
-// whether the behaviour steers (active) or not (idle), and its state's name.
+// whether the behaviour steers (active) or not (idle), its state's name, and whether it halts:
+// idle at once, the robot told zero past the deceleration bound (a stop signal in view).
 struct Decision {
   Twist2D desired;
   bool active = true;
   std::string state;
+  bool halt = false;
 };
 
 // What differs between the behaviours in the shared wiring.
@@ -341,8 +343,8 @@ class BehaviourNodelet : public CheckedNodelet {
     const bool mounted = updateMounting(msg->header.frame_id);
     const Decision decision =
         mounted ? step(frame) : Decision{{}, false, CameraMountingSource::kWaitingState};
-    const Twist2D sent =
-        output_->send(msg->header, decision.desired, decision.active, decision.state);
+    const Twist2D sent = output_->send(msg->header, decision.desired, decision.active,
+                                       decision.state, decision.halt);
     report(frame, sent);
     if (options_.debug_image && debug_pub_.getNumSubscribers() > 0) {
       cv_bridge::CvImage debug(msg->header, "bgr8", image->image.clone());

@@ -24,6 +24,7 @@ namespace follow_bot {
 //    (idle). Active: the limited command goes out. Idle: the limited command goes out until it
 //    reaches zero (the limiter's ramp down, exactly as while active), that one zero included,
 //    then nothing until the behaviour is active again. A node that starts idle sends nothing.
+//    Halting (idle with `halt`): the zero goes out at once, past the deceleration bound.
 //  * ~enable (std_srvs/SetBool): false publishes one zero at once and keeps the node idle
 //    whatever it sees (the limiter ramps up from zero after true).
 //  * ~status (follow_bot_msgs/BehaviourStatus): one per send(), stamped with the frame's stamp:
@@ -77,12 +78,13 @@ class CommandOutput {
   void cameraInfoHandled(bool usable);
   // One processed frame's decision. Limits `desired` (acceleration against the previous send,
   // frameTime(frame) being the frame's time), publishes it per the active/idle rules above and
-  // publishes the frame's ~status; `state` names the behaviour's state (status, diagnostics).
+  // publishes the frame's ~status; `state` names the behaviour's state (status, diagnostics);
+  // `halt`: idle, and zero at once (VelocityLimiter::stop) rather than by the ramp down.
   // Returns the limited command: what the robot was told, or zero when quiet. Any stamps are
   // safe: the time since the previous send is taken as at most the watchdog's timeout, and as none
   // when it runs backwards.
   Twist2D send(const std_msgs::Header& frame, const Twist2D& desired, bool active,
-               const std::string& state);
+               const std::string& state, bool halt = false);
   // Stops now: an immediate zero, unless already stopped (then nothing: cmd_vel stays quiet).
   void stop();
 
