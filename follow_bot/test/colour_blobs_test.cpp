@@ -231,6 +231,35 @@ TEST(ColourBlobDetector, RedIsFoundOnAWoodFloorInsideItsSensitivity) {
   EXPECT_NEAR(red.centroid.y, 240.0, 0.5);
 }
 
+TEST(ColourBlobDetector, RedIsFoundOnAWoodFloorAsRedAsItsWindow) {
+  // A redder wood (hue 8, S 116: the harsh red-stop sweep's member 003) is inside red's window
+  // wholly, and the ball standing on it was one blob with the floor, never round: red was
+  // found on a few frames only and the chaser drove on with it in view. The ball is far more
+  // saturated than the wood; the blob's part more saturated than its Otsu split is the ball.
+  const cv::Scalar wall(150, 150, 160), wood = bgrFromHsv(8, 116, 179);
+  const cv::Point2d centre(210.5, 205.0);
+  const double radius = 36.0;
+  cv::Mat frame(480, 640, CV_8UC3, wall);
+  frame.rowRange(200, 480).setTo(wood);
+  cv::Mat plain_floor = frame.clone();
+  drawDisk(frame, centre, radius, bgrFromHsv(0, 255, 203), true);
+  cv::Mat noise(frame.size(), CV_16SC3);
+  cv::randn(noise, 0.0, 4.0);
+  for (cv::Mat* image : {&frame, &plain_floor}) {
+    cv::Mat noisy;
+    image->convertTo(noisy, CV_16SC3);
+    noisy += noise;
+    noisy.convertTo(*image, CV_8UC3);
+  }
+  const ColourBlobDetector detector;
+  const ColourBlob& red = blobOf(detector.detect(frame), "red");
+  ASSERT_TRUE(red.found);
+  EXPECT_NEAR(red.circle_centre.x, centre.x, 1.5);
+  EXPECT_NEAR(red.circle_centre.y, centre.y, 1.5);
+  EXPECT_NEAR(red.circle_radius, radius, 1.5);
+  EXPECT_FALSE(blobOf(detector.detect(plain_floor), "red").found) << "the wood alone is no ball";
+}
+
 TEST(ColourBlobDetector, HueWindowWrapsAtTheTopForCustomColours) {
   ColourBlobConfig config;
   config.colours = {ColourSpec{"magenta", 170, 15, 100, 40}};  // 155..179 and 0..5

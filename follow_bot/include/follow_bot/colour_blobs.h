@@ -163,6 +163,12 @@ class ColourBlobDetector {
   // take it, or when it is not round as a whole, each ball RANSAC finds in it, cut to its circle.
   void judge(const std::vector<cv::Point>& contour, const cv::Mat& hsv, const ColourSpec& spec,
              std::vector<Candidate>& candidates) const;
+  // A blob judge() took nothing from may be a ball on a floor of nearly its colour (a red ball on
+  // reddish wood), one blob in the mask: judges its part more saturated than the saturation
+  // Otsu's method fits to its pixels, when the two parts differ clearly.
+  void judgeSaturatedPart(const std::vector<cv::Point>& contour, const cv::Mat& mask,
+                          const cv::Mat& hsv, const ColourSpec& spec,
+                          std::vector<Candidate>& candidates) const;
   // The floor-ball and median-hue gates on one blob's outline (`ball`: its circle, if judged).
   bool acceptable(const std::optional<CircleFit>& ball, const std::vector<cv::Point>& contour,
                   const cv::Mat& hsv, const ColourSpec& spec) const;

@@ -75,6 +75,9 @@ constexpr int kMinVisibleBins = kArcBins * 2 / 3;
 constexpr double kMinCircleFill = 0.4;
 // Touching balls of one colour (or a red and an orange sweet in red's hue window) make one blob.
 constexpr int kMaxBallsPerBlob = 4;
+// A blob is split by saturation when its two Otsu classes' mean saturations are this far apart:
+// the harsh sweep's reddish wood reads S ~116, the red ball on it 255.
+constexpr double kMinSaturationGap = 60.0;
 
 bool interior(const cv::Point2d& p, cv::Size image) {
   return p.x > 0 && p.y > 0 && p.x < image.width - 1 && p.y < image.height - 1;
@@ -411,8 +414,11 @@ BlobResult ColourBlobDetector::detect(const cv::Mat& bgr) const {
     ColourBlob& blob = result.colours[i];
     std::vector<Candidate> candidates;
     for (const std::vector<cv::Point>& contour : contours) {
-      if (cv::contourArea(contour) >= config_.min_area) {
-        judge(contour, hsv, config_.colours[i], candidates);
+      if (cv::contourArea(contour) < config_.min_area) continue;
+      const std::size_t before = candidates.size();
+      judge(contour, hsv, config_.colours[i], candidates);
+      if (candidates.size() == before) {
+        judgeSaturatedPart(contour, mask, hsv, config_.colours[i], candidates);
       }
     }
     if (candidates.empty()) continue;
@@ -531,6 +537,58 @@ void ColourBlobDetector::judge(const std::vector<cv::Point>& contour, const cv::
         parts.begin(), parts.end(),
         [](const auto& a, const auto& b) { return cv::contourArea(a) < cv::contourArea(b); });
     if (cv::contourArea(largest) >= config_.min_area) add(std::move(largest), ball);
+  }
+}
+
+void ColourBlobDetector::judgeSaturatedPart(const std::vector<cv::Point>& contour,
+                                            const cv::Mat& mask, const cv::Mat& hsv,
+                                            const ColourSpec& spec,
+                                            std::vector<Candidate>& candidates) const {
+  const cv::Rect roi = cv::boundingRect(contour);
+  cv::Mat pixels = cv::Mat::zeros(roi.size(), CV_8UC1);
+  cv::drawContours(pixels, std::vector<std::vector<cv::Point>>{contour}, 0, 255, cv::FILLED,
+                   cv::LINE_8, cv::noArray(), INT_MAX, -roi.tl());
+  cv::bitwise_and(pixels, mask(roi), pixels);
+  cv::Mat saturation;
+  cv::extractChannel(hsv(roi), saturation, 1);
+  std::array<double, 256> counts{};
+  double total = 0.0, sum = 0.0;
+  for (int r = 0; r < roi.height; ++r) {
+    const uchar* in = pixels.ptr<uchar>(r);
+    const uchar* s = saturation.ptr<uchar>(r);
+    for (int c = 0; c < roi.width; ++c) {
+      if (!in[c]) continue;
+      ++counts[s[c]];
+      ++total;
+      sum += s[c];
+    }
+  }
+  // Otsu: the level that maximises the between-class variance, with the classes' means.
+  double below = 0.0, below_sum = 0.0, best = 0.0, gap = 0.0;
+  int level = -1;
+  for (int t = 0; t < 255; ++t) {
+    below += counts[t];
+    below_sum += t * counts[t];
+    const double above = total - below;
+    if (below == 0.0 || above == 0.0) continue;
+    const double low_mean = below_sum / below, high_mean = (sum - below_sum) / above;
+    const double between = below * above * (high_mean - low_mean) * (high_mean - low_mean);
+    if (between > best) {
+      best = between;
+      level = t;
+      gap = high_mean - low_mean;
+    }
+  }
+  if (level < 0 || gap < kMinSaturationGap) return;
+  cv::Mat part;
+  cv::compare(saturation, level, part, cv::CMP_GT);
+  cv::bitwise_and(part, pixels, part);
+  if (!open_kernel_.empty()) cv::morphologyEx(part, part, cv::MORPH_OPEN, open_kernel_);
+  if (!close_kernel_.empty()) cv::morphologyEx(part, part, cv::MORPH_CLOSE, close_kernel_);
+  std::vector<std::vector<cv::Point>> parts;
+  cv::findContours(part, parts, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, roi.tl());
+  for (const std::vector<cv::Point>& outline : parts) {
+    if (cv::contourArea(outline) >= config_.min_area) judge(outline, hsv, spec, candidates);
   }
 }
 
