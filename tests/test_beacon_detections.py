@@ -25,8 +25,8 @@ from sensor_msgs.msg import CameraInfo, Image
 
 from follow_bot.msg import BeaconDetections
 from follow_bot_msgs.ros_image import bgr_to_msg
+from harness.processes import free_port, stop, wait_for_port
 from harness.render import Renderer
-from harness.run_scenario import free_port, stop, wait_for_port
 from harness.sim_node import camera_info_msg
 from harness.world import Box, Sphere, load_world
 

@@ -10,8 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from harness.node_under_test import private_master
-from harness.run_scenario import free_port
+from harness.processes import free_port, private_master
 
 TOOLS = {
     "stitch": ["rosrun", "image_converter", "stitch"],

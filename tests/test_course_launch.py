@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.processes import free_port, stop, wait_for_port
 
 # A closed-loop check of a minute (the lecture launch, two robots), not a bad-input or fault
 # test: `make test-full` plays it, so `make test` keeps within its 12 minutes.

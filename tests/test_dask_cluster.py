@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from harness.processes import free_port
 from harness.report import without_wall_clock
-from harness.run_scenario import free_port
 
 # Infrastructure checks of a minute or more each: `make test-full` plays them, so `make test`
 # keeps within its 12 minutes with every bad-input, fault and scenario-family test.

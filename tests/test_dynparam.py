@@ -8,8 +8,7 @@ import time
 import pytest
 import yaml
 
-from harness.node_under_test import private_master
-from harness.run_scenario import stop
+from harness.processes import private_master, stop
 
 
 @pytest.fixture(scope="module")

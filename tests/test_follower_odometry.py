@@ -11,7 +11,7 @@ import sys
 import time
 
 from harness.fuzz import NODES, camera_info_msg, probe_frame
-from harness.node_under_test import WatchedProcess, private_master
+from harness.processes import WatchedProcess, private_master
 
 WARNING = "~use_odom: no odometry on"
 SECONDS = 2.5

@@ -16,7 +16,7 @@ import time
 import pytest
 
 from harness.fuzz import NODES, camera_info_msg, probe_frame
-from harness.node_under_test import run_with_client
+from harness.processes import run_with_client
 
 RATE_HZ = {"parker_tag": 120.0, "parker_sign": 700.0}
 SECONDS = 3.0

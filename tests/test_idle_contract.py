@@ -24,7 +24,7 @@ import pytest
 
 from harness.apriltag_image import tag_image
 from harness.fuzz import bgr_msg, camera_info_msg, floor, odom_msg, probe_frame
-from harness.node_under_test import run_with_client
+from harness.processes import run_with_client
 
 RATE = 30.0
 MUX_TIMEOUT_S = 0.5  # an input silent this long loses the mux (twist_mux's usual timeout)

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.processes import free_port, stop, wait_for_port
 
 REPO = Path(__file__).resolve().parents[1]
 RATE_HZ = 30.0

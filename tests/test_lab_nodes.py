@@ -19,7 +19,7 @@ import time
 import numpy as np
 import pytest
 
-from harness.node_under_test import private_master, run_with_client
+from harness.processes import private_master, run_with_client
 
 GREY = (110, 115, 120)  # BGR floor: saturation 21, below every colour's floor
 RECTS = {  # BGR colour and (rows, columns) of each patch

@@ -17,7 +17,7 @@ import threading
 import time
 
 from harness.fuzz import probe_frame
-from harness.node_under_test import run_with_client
+from harness.processes import run_with_client
 
 WAITING = "waiting for camera mounting"
 # The mounting the client's static tf gives (not the ~params' default 0.30 m, 20 deg, 0 m).

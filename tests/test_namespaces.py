@@ -15,8 +15,7 @@ import time
 import pytest
 import rosgraph
 
-from harness.node_under_test import private_master
-from harness.run_scenario import stop
+from harness.processes import private_master, stop
 
 # Topic naming over every node (about 35 s), not a bad-input or fault test: `make test-full`
 # plays it, so `make test` keeps within its 12 minutes.

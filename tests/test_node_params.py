@@ -9,8 +9,7 @@ import subprocess
 
 import pytest
 
-from harness.node_under_test import WatchedProcess, private_master
-from harness.run_scenario import stop
+from harness.processes import WatchedProcess, private_master, stop
 
 
 @pytest.fixture(scope="module")

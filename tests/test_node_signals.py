@@ -8,8 +8,7 @@ import time
 
 import pytest
 
-from harness.node_under_test import WatchedProcess, private_master
-from harness.run_scenario import free_port, stop
+from harness.processes import WatchedProcess, free_port, private_master, stop
 
 NODES = [
     ("follow_bot", "follower"),

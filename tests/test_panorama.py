@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.run_scenario import free_port, stop, wait_for_port
+from harness.processes import free_port, stop, wait_for_port
 from harness.world import Sphere, load_world
 
 WORLD = Path(__file__).resolve().parents[1] / "worlds" / "rgb.yaml"

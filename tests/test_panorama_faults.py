@@ -15,7 +15,7 @@ import time
 import pytest
 
 from harness.fuzz import camera_info_msg, image_msg, odom_msg, probe_frame
-from harness.node_under_test import run_with_client
+from harness.processes import run_with_client
 
 FRAME_TIMEOUT_S = 1.0  # the node's ~frame_timeout default (follow_bot/README.md)
 STOP_WITHIN_S = 0.2  # the safety contract: a zero Twist within 0.2 s when frames stop

@@ -20,9 +20,8 @@ import numpy as np
 import pytest
 import yaml
 
-from harness.node_under_test import private_master
+from harness.processes import private_master, stop
 from harness.robot_description import BASE_LINK_HEIGHT, urdf
-from harness.run_scenario import stop
 from harness.world import load_world, resolve_world_path
 
 OPTICAL = "camera_rgb_optical_frame"

@@ -19,8 +19,7 @@ import pytest
 import rosgraph
 import yaml
 
-from harness.node_under_test import private_master
-from harness.run_scenario import stop
+from harness.processes import private_master, stop
 from harness.scenario import check, load_scenarios, metrics
 from harness.world import load_world
 

@@ -39,7 +39,7 @@ from harness.fuzz import (
     odom_msg,
     probe_frame,
 )
-from harness.node_under_test import run_with_client
+from harness.processes import run_with_client
 
 RATE_HZ = 30.0
 SLOW_FRAME_TICKS = 6  # a frame every 6th tick: a 5 Hz camera

@@ -5,7 +5,7 @@ mounting as ~params. In lockstep it tells the node the simulator's per-step wall
 from dataclasses import replace
 from pathlib import Path
 
-from harness.run_scenario import behaviour_command, description_command
+from harness.runs import behaviour_command, description_command
 from harness.scenario import load_scenarios
 from harness.world import load_world
 

@@ -20,7 +20,7 @@ from distributed import Client
 from distributed import as_completed as tasks_completed
 from tqdm import tqdm
 
-from harness.run_scenario import describe, error_entry, play
+from harness.runs import describe, error_entry, play
 from harness.scenario import Scenario, parse_scenario
 from harness.world import WORLDS_DIR
 

@@ -35,9 +35,8 @@ import numpy as np
 from follow_bot import core
 from follow_bot.cfg import BeaconChaserConfig
 from harness.apriltag_image import tag_image
-from harness.node_under_test import private_master
+from harness.processes import private_master, stop
 from harness.render import Renderer
-from harness.run_scenario import stop
 from harness.world import package_dir, parse_world
 
 SIGN_IMAGE = package_dir("follow_bot") / "assets" / "parking_sign.png"
