@@ -7,9 +7,9 @@ import cv2
 import numpy as np
 import pytest
 
+from harness.distractors import TAPE_COLOUR, with_distractors
 from harness.realism import (
     PROFILES,
-    TAPE_COLOUR,
     Realism,
     Sensor,
     floor_texture,
@@ -17,7 +17,6 @@ from harness.realism import (
     parse_realism,
     realism_from,
     shadow_band_mask,
-    with_distractors,
 )
 from harness.render import Renderer
 from harness.validation import ValidationError

@@ -17,6 +17,7 @@ import numpy as np
 
 from harness.apriltag_image import family_geometry, tag_image
 from harness.camera import PINHOLE, Camera
+from harness.distractors import with_distractors
 from harness.geometry import clip_polygon_near, rot_z
 from harness.realism import (
     DriftingShadows,
@@ -27,7 +28,6 @@ from harness.realism import (
     shadow_band_mask,
     shadow_gains,
     wall_texture,
-    with_distractors,
 )
 from harness.robot import integrate_unicycle
 from harness.world import AprilTagMarker, Box, Sphere, TextureMarker, World, WorldObject
