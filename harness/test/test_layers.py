@@ -10,9 +10,8 @@ MAX_LINES = 400
 OVERSIZE = {
     "fuzz": 1012,
     "scenario": 749,
-    "render": 738,
+    "render": 737,
     "world": 516,
-    "realism": 492,
     "sim_node": 407,
 }
 

@@ -8,17 +8,10 @@ import numpy as np
 import pytest
 
 from harness.distractors import TAPE_COLOUR, with_distractors
-from harness.realism import (
-    PROFILES,
-    Realism,
-    Sensor,
-    floor_texture,
-    line_kernel,
-    parse_realism,
-    realism_from,
-    shadow_band_mask,
-)
+from harness.realism import PROFILES, Realism, parse_realism, realism_from
 from harness.render import Renderer
+from harness.sensor import Sensor, line_kernel
+from harness.textures import floor_texture, shadow_band_mask
 from harness.validation import ValidationError
 
 REALISTIC = realism_from(PROFILES["realistic"])

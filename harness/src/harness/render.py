@@ -19,17 +19,16 @@ from harness.apriltag_image import family_geometry, tag_image
 from harness.camera import PINHOLE, Camera
 from harness.distractors import with_distractors
 from harness.geometry import clip_polygon_near, rot_z
-from harness.realism import (
+from harness.realism import Realism
+from harness.robot import integrate_unicycle
+from harness.sensor import Sensor, gaussian_table
+from harness.textures import (
     DriftingShadows,
-    Realism,
-    Sensor,
     floor_texture,
-    gaussian_table,
     shadow_band_mask,
     shadow_gains,
     wall_texture,
 )
-from harness.robot import integrate_unicycle
 from harness.world import AprilTagMarker, Box, Sphere, TextureMarker, World, WorldObject
 
 Pose = tuple[float, float, float]
