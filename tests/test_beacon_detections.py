@@ -24,10 +24,9 @@ import rospy
 from sensor_msgs.msg import CameraInfo, Image
 
 from follow_bot.msg import BeaconDetections
-from follow_bot_msgs.ros_image import bgr_to_msg
+from follow_bot_msgs.ros_image import bgr_to_msg, camera_info_msg
 from harness.processes import free_port, stop, wait_for_port
 from harness.render import Renderer
-from harness.sim_node import camera_info_msg
 from harness.world import Box, Sphere, load_world
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"
@@ -217,7 +216,7 @@ class NodeUnderTest:
     def detect(self, image: np.ndarray, camera, name: str) -> BeaconDetections:
         self.stamp += 1.0 / 30.0
         stamp = rospy.Time.from_sec(self.stamp)
-        info = camera_info_msg(camera.camera_info_dict())
+        info = camera_info_msg(**camera.camera_info_dict())
         info.header.stamp = stamp
         self.info_pub.publish(info)
         self.image_pub.publish(bgr_to_msg(image, stamp, camera.frame_id))

@@ -10,7 +10,7 @@ import subprocess
 import sys
 import time
 
-from harness.fuzz import NODES, camera_info_msg, probe_frame
+from harness.fuzz import NODES, pinhole_info, probe_frame
 from harness.processes import WatchedProcess, private_master
 
 WARNING = "~use_odom: no odometry on"
@@ -27,7 +27,7 @@ def client() -> None:
     info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1, latch=True)
     twists: list[Twist] = []
     rospy.Subscriber("/cmd_vel", Twist, twists.append)
-    info_pub.publish(camera_info_msg())
+    info_pub.publish(pinhole_info())
     deadline = time.monotonic() + 30
     while image_pub.get_num_connections() == 0 and time.monotonic() < deadline:
         time.sleep(0.05)

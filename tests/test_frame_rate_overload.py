@@ -15,7 +15,7 @@ import time
 
 import pytest
 
-from harness.fuzz import NODES, camera_info_msg, probe_frame
+from harness.fuzz import NODES, pinhole_info, probe_frame
 from harness.processes import run_with_client
 
 RATE_HZ = {"parker_tag": 120.0, "parker_sign": 700.0}
@@ -36,7 +36,7 @@ def client(key: str) -> None:
         "/parker/target_pose", PoseStamped,
         lambda m: poses.append((m.header.stamp.to_sec(), time.monotonic())), tcp_nodelay=True,
     )  # fmt: skip
-    info_pub.publish(camera_info_msg())
+    info_pub.publish(pinhole_info())
     deadline = time.monotonic() + 30
     while image_pub.get_num_connections() == 0 and time.monotonic() < deadline:
         time.sleep(0.05)

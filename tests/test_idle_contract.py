@@ -23,7 +23,7 @@ import cv2
 import pytest
 
 from harness.apriltag_image import tag_image
-from harness.fuzz import bgr_msg, camera_info_msg, floor, odom_msg, probe_frame
+from harness.fuzz import bgr_msg, floor, odom_msg, pinhole_info, probe_frame
 from harness.processes import run_with_client
 
 RATE = 30.0
@@ -53,7 +53,7 @@ class Lockstep:
         self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self._on_twist)
         self.diagnostics_name = f"{node}: behaviour"
         rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diagnostics)
-        info_pub.publish(camera_info_msg())
+        info_pub.publish(pinhole_info())
         odom_pub.publish(odom_msg(0.0))
         deadline = time.monotonic() + 30
         while time.monotonic() < deadline and not (

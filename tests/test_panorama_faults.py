@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from harness.fuzz import camera_info_msg, image_msg, odom_msg, probe_frame
+from harness.fuzz import image_msg, odom_msg, pinhole_info, probe_frame
 from harness.processes import run_with_client
 
 FRAME_TIMEOUT_S = 1.0  # the node's ~frame_timeout default (follow_bot/README.md)
@@ -50,7 +50,7 @@ def client() -> None:
                 behaviour.append(status)
 
     rospy.Subscriber("/diagnostics", DiagnosticArray, on_diagnostics)
-    info_pub.publish(camera_info_msg())
+    info_pub.publish(pinhole_info())
     odom_pub.publish(odom_msg(0.0))
     rospy.wait_for_service("/panorama/capture", timeout=30)
     deadline = time.monotonic() + 30

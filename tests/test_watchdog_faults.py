@@ -34,9 +34,9 @@ from harness.fuzz import (
     NODES,
     WIDTH,
     bgr_msg,
-    camera_info_msg,
     image_msg,
     odom_msg,
+    pinhole_info,
     probe_frame,
 )
 from harness.processes import run_with_client
@@ -117,7 +117,7 @@ def client(key: str) -> None:
         published[0] = sim_time[0]
         # A camera that changes resolution publishes the intrinsics of the new size.
         (width, height), fx = size[0], FX * size[0][0] / WIDTH
-        info_pub.publish(camera_info_msg(fx, fx, width / 2, height / 2, width, height))
+        info_pub.publish(pinhole_info(fx, fx, width / 2, height / 2, width, height))
         if frame:
             # Lockstep, as the simulator: the next tick waits for this frame's answer, and for
             # its Twist when the answer says one went out.

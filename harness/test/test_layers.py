@@ -8,11 +8,10 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "harness"
 MAX_LINES = 400
 # Still to be split, at their length today: a ceiling, lowered as each is split.
 OVERSIZE = {
-    "fuzz": 1012,
+    "fuzz": 1006,
     "scenario": 749,
     "render": 737,
     "world": 516,
-    "sim_node": 407,
 }
 
 

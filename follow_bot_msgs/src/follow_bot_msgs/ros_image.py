@@ -1,7 +1,32 @@
-"""numpy <-> sensor_msgs/Image without cv_bridge (its Python module is built for Debian's numpy)."""
+"""numpy <-> sensor_msgs/Image without cv_bridge (its Python module is built for Debian's numpy),
+and sensor_msgs/CameraInfo from its fields."""
 
 import numpy as np
-from sensor_msgs.msg import CompressedImage, Image
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image
+
+IDENTITY_3X3 = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+
+
+# The arguments are the message's own field names, K, D, R and P included.
+def camera_info_msg(
+    width: int,
+    height: int,
+    K,  # noqa: N803
+    D=(0.0,) * 5,  # noqa: N803
+    R=IDENTITY_3X3,  # noqa: N803
+    P=None,  # noqa: N803
+    distortion_model: str = "plumb_bob",
+    frame_id: str = "",
+) -> CameraInfo:
+    """A CameraInfo of these fields (row-major lists); P defaults to K with a zero fourth column
+    (a monocular camera)."""
+    msg = CameraInfo()
+    msg.header.frame_id = frame_id
+    msg.width, msg.height = width, height
+    msg.distortion_model = distortion_model
+    msg.K, msg.D, msg.R = list(K), list(D), list(R)
+    msg.P = list(P) if P is not None else [*K[0:3], 0.0, *K[3:6], 0.0, *K[6:9], 0.0]
+    return msg
 
 
 def bgr_to_msg(image: np.ndarray, stamp, frame_id: str) -> Image:

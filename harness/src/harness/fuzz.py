@@ -149,17 +149,11 @@ def bgr_msg(bgr: np.ndarray, stamp=(0, 0)):
     return image_msg(w, h, "bgr8", w * 3, np.ascontiguousarray(bgr).tobytes(), stamp)
 
 
-def camera_info_msg(fx=FX, fy=FX, cx=WIDTH / 2, cy=HEIGHT / 2, width=WIDTH, height=HEIGHT):
-    from sensor_msgs.msg import CameraInfo
+def pinhole_info(fx=FX, fy=FX, cx=WIDTH / 2, cy=HEIGHT / 2, width=WIDTH, height=HEIGHT):
+    """The CameraInfo of a distortion-free camera."""
+    from follow_bot_msgs.ros_image import camera_info_msg
 
-    info = CameraInfo()
-    info.width, info.height = width, height
-    info.K = [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]
-    info.P = [fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0]
-    info.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
-    info.distortion_model = "plumb_bob"
-    info.D = [0.0] * 5
-    return info
+    return camera_info_msg(width, height, [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0])
 
 
 def odom_msg(yaw=0.0):
@@ -239,7 +233,7 @@ def broken_camera_infos() -> list:
     line = probe_frame("line")
     messages = []
     for fields in broken:
-        info = camera_info_msg()
+        info = pinhole_info()
         for name, value in fields.items():
             setattr(info, name, value)
         info.header.stamp.secs = 1000
@@ -347,7 +341,7 @@ class Storm:
         r = self.rng
         if r.random() < 0.3:
             fx = FX * r.uniform(0.5, 2.0)
-            info = camera_info_msg(fx, fx * r.uniform(0.9, 1.1), WIDTH / 2 * r.uniform(0.8, 1.2),
+            info = pinhole_info(fx, fx * r.uniform(0.9, 1.1), WIDTH / 2 * r.uniform(0.8, 1.2),
                                    HEIGHT / 2 * r.uniform(0.8, 1.2))  # fmt: skip
             if r.random() < 0.5:
                 info.D = [r.uniform(-0.3, 0.3), r.uniform(-0.1, 0.1), 0.0, 0.0, 0.0]
@@ -358,7 +352,7 @@ class Storm:
         def value(typical):
             return r.choice(special) if r.random() < 0.4 else typical * r.uniform(0.01, 3)
 
-        info = camera_info_msg(value(FX), value(FX), value(WIDTH / 2), value(HEIGHT / 2))
+        info = pinhole_info(value(FX), value(FX), value(WIDTH / 2), value(HEIGHT / 2))
         info.width = r.choice([0, 1, WIDTH, 2**32 - 1, r.randrange(2**32)])
         info.height = r.choice([0, 1, HEIGHT, 2**32 - 1, r.randrange(2**32)])
         info.D = [r.choice([*special, 0.1]) for _ in range(r.choice([0, 1, 5, 8, 14, 50]))]
@@ -661,7 +655,7 @@ class NodeUnderTest:
 
     def prepare(self):
         """Intrinsics and a pose; a capture running in the background when asked."""
-        self.send(camera_info_msg(), usable=True)
+        self.send(pinhole_info(), usable=True)
         self.odom_pub.publish(odom_msg())
         time.sleep(0.1)
         if self.spec.capturing:
@@ -754,7 +748,7 @@ class NodeUnderTest:
 
     def probe(self) -> str:
         """Empty when a valid frame gets the right answer, else what went wrong."""
-        self.send(camera_info_msg(), usable=True)
+        self.send(pinhole_info(), usable=True)
         self.odom_pub.publish(odom_msg())
         time.sleep(0.2)
         probe = self.spec.probe

@@ -49,7 +49,7 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 
 from follow_bot_msgs.msg import BehaviourStatus
-from follow_bot_msgs.ros_image import bgr_to_jpeg_msg, bgr_to_msg
+from follow_bot_msgs.ros_image import bgr_to_jpeg_msg, bgr_to_msg, camera_info_msg
 from harness.debug_video import DebugView
 from harness.node_cli import BEHAVIOUR_GONE, parse_node_command_line
 from harness.robot_preset import GENERIC, camera_topics, robot_world
@@ -68,15 +68,6 @@ CLOCK_PREROLL_S = 0.1
 # How long to wait for that mounting; a description whose frames the sim cannot see (another
 # tf tree) only costs this once.
 MOUNTING_WAIT_S = 5.0
-
-
-def camera_info_msg(info: dict) -> CameraInfo:
-    msg = CameraInfo()
-    msg.header.frame_id = info["frame_id"]
-    msg.width, msg.height = info["width"], info["height"]
-    msg.distortion_model = info["distortion_model"]
-    msg.D, msg.K, msg.R, msg.P = info["D"], info["K"], info["R"], info["P"]
-    return msg
 
 
 class CommandInbox:
@@ -173,7 +164,7 @@ class SimNode:
         self.wait_for_behaviour = float(rospy.get_param("~wait_for_behaviour", 20.0))
         self.laps = LapTracker(world.centreline()) if self.stop_at_lap else None
 
-        self.camera_info = camera_info_msg(self.sim.renderer.camera.camera_info_dict())
+        self.camera_info = camera_info_msg(**self.sim.renderer.camera.camera_info_dict())
         self.inbox = CommandInbox()
         # Synchronous publishing (queue_size=None): each message is on the wire before the next
         # is made, so a behaviour never sees frame k while its clock still says k - n. With a
