@@ -303,7 +303,7 @@ SHADOW_EDGES = {
 }
 # Lines found at 55 % and 30 % of the light (measured).
 LINES_BESIDE_AN_EDGE = {
-    "left half": (21, 12),
+    "left half": (21, 14),
     "right half": (24, 24),
     "left 70 %": (20, 11),
     "right 70 %": (23, 22),
