@@ -36,7 +36,8 @@ from tf2_msgs.msg import TFMessage
 from follow_bot import bag_doctor, core
 from harness.realism import PROFILES, barrel_distortion, realism_from
 from harness.render import Renderer
-from harness.world import WORLDS_DIR, load_world
+from harness.world import WORLDS_DIR
+from harness.world_file import load_world
 
 STEP_M = 0.25  # lap frames this far apart along the line
 RATE_HZ = 0.3 / STEP_M  # as a robot at 0.3 m/s

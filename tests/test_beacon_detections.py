@@ -27,7 +27,8 @@ from follow_bot.msg import BeaconDetections
 from follow_bot_msgs.ros_image import bgr_to_msg, camera_info_msg
 from harness.processes import free_port, stop, wait_for_port
 from harness.render import Renderer
-from harness.world import Box, Sphere, load_world
+from harness.world import Box, Sphere
+from harness.world_file import load_world
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 CENTROID_TOLERANCE_PX = 3.0

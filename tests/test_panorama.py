@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 
 from harness.processes import free_port, stop, wait_for_port
-from harness.world import Sphere, load_world
+from harness.world import Sphere
+from harness.world_file import load_world
 
 WORLD = Path(__file__).resolve().parents[1] / "worlds" / "rgb.yaml"
 # OpenCV HSV (H 0-179) bands of the rgb world's sphere colours, shading included.

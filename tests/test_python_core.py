@@ -25,7 +25,8 @@ from test_stitch_cli import textured_scene  # the same ORB-friendly scenes as th
 
 from follow_bot import core
 from harness.render import Renderer
-from harness.world import WORLDS_DIR, load_world
+from harness.world import WORLDS_DIR
+from harness.world_file import load_world
 from image_converter import core as ic_core
 
 # Robot poses (x, y, yaw): on the course's first straight, off to either side, across a curve,

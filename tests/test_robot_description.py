@@ -22,7 +22,7 @@ import yaml
 
 from harness.processes import private_master, stop
 from harness.robot_description import BASE_LINK_HEIGHT, urdf
-from harness.world import load_world, resolve_world_path
+from harness.world_file import load_world, resolve_world_path
 
 OPTICAL = "camera_rgb_optical_frame"
 

@@ -23,7 +23,7 @@ import yaml
 
 from follow_bot.cfg import ParkerConfig
 from harness.marker_map import load_frames, to_world
-from harness.world import load_world, resolve_world_path
+from harness.world_file import load_world, resolve_world_path
 
 REPO = Path(__file__).resolve().parents[1]
 RVIZ = sorted((REPO / "follow_bot" / "rviz").glob("*.rviz"))

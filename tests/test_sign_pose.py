@@ -20,7 +20,7 @@ from harness.camera import LENSES
 from harness.geometry import incidence_deg, rotation_angle_deg
 from harness.render import Renderer
 from harness.scenario import load_scenarios
-from harness.world import load_world
+from harness.world_file import load_world
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 SCENARIOS = WORLDS / "scenarios"

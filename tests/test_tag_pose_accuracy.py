@@ -33,7 +33,7 @@ import pytest
 from harness.camera import LENSES
 from harness.geometry import rotation_angle_deg
 from harness.render import Renderer
-from harness.world import load_world
+from harness.world_file import load_world
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 

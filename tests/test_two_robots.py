@@ -21,7 +21,7 @@ import yaml
 
 from harness.processes import private_master, stop
 from harness.scenario import check, load_scenarios, metrics
-from harness.world import load_world
+from harness.world_file import load_world
 
 # A closed-loop check of a minute (the lecture launch, two robots), not a bad-input or fault
 # test: `make test-full` plays it, so `make test` keeps within its 12 minutes.

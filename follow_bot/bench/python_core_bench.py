@@ -25,7 +25,8 @@ import numpy as np
 
 from follow_bot import core
 from harness.render import Renderer
-from harness.world import WORLDS_DIR, load_world
+from harness.world import WORLDS_DIR
+from harness.world_file import load_world
 
 MAX_RATIO = 1.10
 ROUNDS = 5

@@ -9,7 +9,8 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 if str(SRC) not in sys.path:
     sys.path.insert(0, str(SRC))
 
-from harness.world import WORLDS_DIR, World, load_world  # noqa: E402
+from harness.world import WORLDS_DIR, World  # noqa: E402
+from harness.world_file import load_world  # noqa: E402
 
 
 @pytest.fixture(scope="session")

@@ -10,7 +10,8 @@ import pytest
 from harness.camera import LENSES
 from harness.render import Renderer
 from harness.scenario import check, find_object, load_scenarios, metrics
-from harness.world import TextureMarker, load_world
+from harness.world import TextureMarker
+from harness.world_file import load_world
 
 FAMILY = load_scenarios(
     Path(__file__).resolve().parents[2] / "worlds" / "scenarios" / "parker_sign.yaml"

@@ -8,7 +8,8 @@ from harness.apriltag_image import detect
 from harness.scenario import ScenarioError, parse_scenario
 from harness.scoring import still_since
 from harness.simulation import Perturbations, Simulation
-from harness.world import WORLDS_DIR, load_world
+from harness.world import WORLDS_DIR
+from harness.world_file import load_world
 
 BASE = {"world": "parking", "driver": {"constant": [0.0, 0.0]}, "duration": 1.0}
 

@@ -79,7 +79,7 @@ def test_drifting_shadows_darken_and_tint_the_floor_and_move(worlds):
 def test_a_realism_lens_delay_lag_and_dropped_frames_reach_the_run():
     from harness.scenario import parse_scenario
     from harness.simulation import Simulation
-    from harness.world import load_world
+    from harness.world_file import load_world
 
     realism = {"barrel": 0.28, "actuation_delay": 0.05, "motor_lag": 0.1, "frame_drop": 0.2}
     scenario = parse_scenario(
@@ -256,7 +256,7 @@ def test_a_scenario_sets_realism_and_lens_over_the_world(tmp_path):
     from harness.camera import LENSES
     from harness.scenario import parse_scenario
     from harness.simulation import Simulation
-    from harness.world import load_world
+    from harness.world_file import load_world
 
     scenario = parse_scenario(
         {

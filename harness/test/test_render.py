@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from harness.render import Renderer, bench_render
-from harness.world import parse_world
+from harness.world_file import parse_world
 
 FX = 320.0 / math.tan(math.radians(30.0))
 

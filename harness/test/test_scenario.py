@@ -19,7 +19,7 @@ from harness.scenario import (
     stop_on_sight,
 )
 from harness.simulation import Perturbations, Simulation, with_line_gaps
-from harness.world import load_world, resolve_world_path
+from harness.world_file import load_world, resolve_world_path
 
 MINIMAL = {"world": "course", "driver": {"constant": [0.2, 0.0]}, "duration": 2.0}
 

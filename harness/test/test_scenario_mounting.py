@@ -7,7 +7,7 @@ from pathlib import Path
 
 from harness.runs import behaviour_command, description_command
 from harness.scenario import load_scenarios
-from harness.world import load_world
+from harness.world_file import load_world
 
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"
 SCENARIOS = WORLDS / "scenarios"

@@ -11,7 +11,8 @@ from harness.report import distributions, markdown, summarise, wilson_interval, 
 from harness.scenario import ScenarioError, load_scenarios
 from harness.sweep import Distribution, draw, member_name, member_seed, parse_sweep
 from harness.validation import ValidationError
-from harness.world import WORLDS_DIR, load_world
+from harness.world import WORLDS_DIR
+from harness.world_file import load_world
 
 FAMILY = """
 base: {world: parking, driver: {constant: [0.2, 0.0]}, duration: 2.0, start: {from: goal_tag}}

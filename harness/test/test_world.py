@@ -9,7 +9,8 @@ import pytest
 
 from harness.geometry import polyline_length
 from harness.render import ground_texture
-from harness.world import AprilTagMarker, Box, Sphere, WorldError, load_world, parse_world
+from harness.world import AprilTagMarker, Box, Sphere, WorldError
+from harness.world_file import load_world, parse_world
 
 MINIMAL = {
     "name": "t",

@@ -12,7 +12,8 @@ from pathlib import Path
 import cv2
 
 from harness.render import bench_render
-from harness.world import WORLDS_DIR, load_world
+from harness.world import WORLDS_DIR
+from harness.world_file import load_world
 
 LOCKSTEP_SCENARIO = WORLDS_DIR / "scenarios" / "bench_lockstep.yaml"
 

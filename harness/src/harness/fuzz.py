@@ -37,7 +37,8 @@ from follow_bot.cfg import BeaconChaserConfig
 from harness.apriltag_image import tag_image
 from harness.processes import private_master, stop
 from harness.render import Renderer
-from harness.world import package_dir, parse_world
+from harness.world import package_dir
+from harness.world_file import parse_world
 
 SIGN_IMAGE = package_dir("follow_bot") / "assets" / "parking_sign.png"
 SIGN_WIDTH_M = 0.40

@@ -13,7 +13,8 @@ import sys
 
 from follow_bot.robot_description import BASE_LINK_HEIGHT, mounting, mounting_parser, urdf
 from harness.robot_preset import robot_world
-from harness.world import WorldError, load_world, resolve_world_path
+from harness.world import WorldError
+from harness.world_file import load_world, resolve_world_path
 
 __all__ = ["BASE_LINK_HEIGHT", "main", "urdf"]
 

@@ -39,12 +39,8 @@ from harness.validation import (
     string,
     vector,
 )
-from harness.world import (
-    Box,
-    CameraTransport,
-    Sphere,
-    World,
-    WorldError,
+from harness.world import Box, CameraTransport, Sphere, World, WorldError
+from harness.world_file import (
     load_world,
     parse_camera_transport,
     parse_distortion,

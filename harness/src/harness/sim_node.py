@@ -56,7 +56,8 @@ from harness.robot_preset import GENERIC, camera_topics, robot_world
 from harness.scenario import ScenarioError, load_scenario, scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
-from harness.world import WorldError, load_world, resolve_world_path
+from harness.world import WorldError
+from harness.world_file import load_world, resolve_world_path
 
 # The robot description's root (harness/robot_description.py): a base driver's odom child frame.
 BASE_FRAME = "base_footprint"
