@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from harness.scenario import load_scenarios, merged
+from harness.scenario_file import load_scenarios, merged
 
 GUARD = Path(__file__).resolve().parents[1] / "worlds" / "scenarios" / "regression_guard.yaml"
 STANDOFF = 0.5  # the parker's default ~standoff, m

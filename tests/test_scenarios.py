@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from harness.camera import LENSES
-from harness.scenario import load_scenarios
+from harness.scenario_file import load_scenarios
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"
 # How many runs each family's matrix holds: a file that expands to fewer (a lost matrix entry, a

@@ -19,7 +19,7 @@ import pytest
 from harness.camera import LENSES
 from harness.geometry import incidence_deg, rotation_angle_deg
 from harness.render import Renderer
-from harness.scenario import load_scenarios
+from harness.scenario_file import load_scenarios
 from harness.world_file import load_world
 
 WORLDS = Path(__file__).resolve().parents[1] / "worlds"

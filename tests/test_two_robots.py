@@ -19,8 +19,9 @@ import pytest
 import rosgraph
 import yaml
 
+from harness.evaluation import check, metrics
 from harness.processes import private_master, stop
-from harness.scenario import check, load_scenarios, metrics
+from harness.scenario_file import load_scenarios
 from harness.world_file import load_world
 
 # A closed-loop check of a minute (the lecture launch, two robots), not a bad-input or fault

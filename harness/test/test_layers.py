@@ -9,7 +9,6 @@ MAX_LINES = 400
 # Still to be split, at their length today: a ceiling, lowered as each is split.
 OVERSIZE = {
     "fuzz": 1007,
-    "scenario": 745,
     "render": 737,
 }
 

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from harness.camera import LENSES
+from harness.evaluation import check, find_object, metrics
 from harness.render import Renderer
-from harness.scenario import check, find_object, load_scenarios, metrics
+from harness.scenario_file import load_scenarios
 from harness.world import TextureMarker
 from harness.world_file import load_world
 

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from harness.apriltag_image import detect
-from harness.scenario import ScenarioError, parse_scenario
+from harness.scenario import ScenarioError
+from harness.scenario_parse import parse_scenario
 from harness.scoring import still_since
 from harness.simulation import Perturbations, Simulation
 from harness.world import WORLDS_DIR

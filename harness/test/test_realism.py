@@ -77,7 +77,7 @@ def test_drifting_shadows_darken_and_tint_the_floor_and_move(worlds):
 
 
 def test_a_realism_lens_delay_lag_and_dropped_frames_reach_the_run():
-    from harness.scenario import parse_scenario
+    from harness.scenario_parse import parse_scenario
     from harness.simulation import Simulation
     from harness.world_file import load_world
 
@@ -254,7 +254,7 @@ def test_distractors_keep_clear_of_the_course_and_the_robots_way(worlds):
 
 def test_a_scenario_sets_realism_and_lens_over_the_world(tmp_path):
     from harness.camera import LENSES
-    from harness.scenario import parse_scenario
+    from harness.scenario_parse import parse_scenario
     from harness.simulation import Simulation
     from harness.world_file import load_world
 
@@ -276,7 +276,7 @@ def test_a_scenario_sets_realism_and_lens_over_the_world(tmp_path):
 def test_realistic_families_extend_the_clean_ones_with_their_bounds():
     from pathlib import Path
 
-    from harness.scenario import load_scenarios
+    from harness.scenario_file import load_scenarios
 
     folder = Path(__file__).resolve().parents[2] / "worlds" / "realistic"
     sizes = {

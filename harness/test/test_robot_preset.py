@@ -8,7 +8,8 @@ import math
 import pytest
 
 from harness.robot_preset import camera_topics, robot_world
-from harness.scenario import ScenarioError, parse_scenario, scenario_world
+from harness.scenario import ScenarioError
+from harness.scenario_parse import parse_scenario, scenario_world
 from harness.world_file import load_world, resolve_world_path
 
 LAP = {"world": "course", "behaviour": {"launch": "follow_bot follower.launch"}, "duration": 2.0}

@@ -7,17 +7,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from harness.evaluation import check, metrics, stop_on_sight
 from harness.geometry import polyline_length
-from harness.scenario import (
-    Criterion,
-    ScenarioError,
-    check,
-    load_scenarios,
-    metrics,
-    parse_scenario,
-    scenario_world,
-    stop_on_sight,
-)
+from harness.scenario import Criterion, ScenarioError
+from harness.scenario_file import load_scenarios
+from harness.scenario_parse import parse_scenario, scenario_world
 from harness.simulation import Perturbations, Simulation, with_line_gaps
 from harness.world_file import load_world, resolve_world_path
 

@@ -6,7 +6,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from harness.runs import behaviour_command, description_command
-from harness.scenario import load_scenarios
+from harness.scenario_file import load_scenarios
 from harness.world_file import load_world
 
 WORLDS = Path(__file__).resolve().parents[2] / "worlds"

@@ -8,7 +8,8 @@ import pytest
 
 from harness.geometry import polyline_length
 from harness.report import distributions, markdown, summarise, wilson_interval, worst, write_summary
-from harness.scenario import ScenarioError, load_scenarios
+from harness.scenario import ScenarioError
+from harness.scenario_file import load_scenarios
 from harness.sweep import Distribution, draw, member_name, member_seed, parse_sweep
 from harness.validation import ValidationError
 from harness.world import WORLDS_DIR

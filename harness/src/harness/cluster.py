@@ -21,7 +21,8 @@ from distributed import as_completed as tasks_completed
 from tqdm import tqdm
 
 from harness.runs import describe, error_entry, play
-from harness.scenario import Scenario, parse_scenario
+from harness.scenario import Scenario
+from harness.scenario_parse import parse_scenario
 from harness.world import WORLDS_DIR
 
 

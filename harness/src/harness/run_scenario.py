@@ -25,7 +25,8 @@ from pathlib import Path
 from harness.contact_sheet import DEFAULT_FRAMES
 from harness.report import headline_text, write_summary
 from harness.runs import run_all
-from harness.scenario import ScenarioError, load_scenarios
+from harness.scenario import ScenarioError
+from harness.scenario_file import load_scenarios
 from harness.world import WorldError
 
 

@@ -24,19 +24,14 @@ from tqdm import tqdm
 
 from harness.camera import Camera
 from harness.contact_sheet import write_contact_sheet
+from harness.evaluation import check, metrics
 from harness.marker_map import load_frames, plot_markers
 from harness.node_cli import BEHAVIOUR_GONE
 from harness.plot import plot_run
 from harness.processes import start_master, stop, use_sim_time, wait_for_node
 from harness.report import format_value, headline, headline_text
-from harness.scenario import (
-    Scenario,
-    ScenarioError,
-    check,
-    find_object,
-    metrics,
-    scenario_world,
-)
+from harness.scenario import Scenario, ScenarioError, find_object
+from harness.scenario_parse import scenario_world
 from harness.world import WorldError
 
 # Wall-clock allowance on top of the scenario's sim duration (start-up, slow machines).

@@ -2,22 +2,21 @@
 
 Publishes /clock, the camera image and camera_info (camera/rgb/image_raw, or its /compressed JPEG
 as the world's or scenario's camera transport says; camera/rgb/camera_info; a robot preset's
-topics with its camera),
-the robot's pose as a base driver does (odom, nav_msgs/Odometry, and tf odom -> base_footprint,
-the root of the robot description; exact: the simulator's true pose), the same on ~pose (e.g.
-/sim/pose); subscribes cmd_vel and the
-behaviour's per-frame status (follow_bot_msgs/BehaviourStatus, docs/behaviour_contract.md). Topic
-names other than /clock are relative, so under ROS_NAMESPACE or <group ns> the simulator and the
-behaviour it drives share one namespace.
+topics with its camera), the robot's pose as a base driver does (odom, nav_msgs/Odometry, and tf
+odom -> base_footprint, the root of the robot description; exact: the simulator's true pose), the
+same on ~pose (e.g. /sim/pose); subscribes cmd_vel and the behaviour's per-frame status
+(follow_bot_msgs/BehaviourStatus, docs/behaviour_contract.md). Topic names other than /clock are
+relative, so under ROS_NAMESPACE or <group ns> the simulator and the behaviour it drives share
+one namespace.
 
 Lockstep (default): publish frame k, wait for the one status the behaviour answers with (up to
 ~reply_timeout wall seconds; a miss is counted, and a miss with no publisher left on the status
 topic ends the run: the behaviour is not running, exit code BEHAVIOUR_GONE), apply the command
 it says it sent on cmd_vel (none sent: the behaviour is quiet, its last command was a zero, the
-robot stands),
-integrate one step, repeat: runs are repeatable and as fast as the behaviour. Steps without a
-frame (camera dropout) pass at wall pace and apply what arrives on cmd_vel (the watchdog's
-stop). Real-time (~lockstep false): frames at ~rate_hz of wall clock, the latest cmd_vel applied.
+robot stands), integrate one step, repeat: runs are repeatable and as fast as the behaviour.
+Steps without a frame (camera dropout) pass at wall pace and apply what arrives on cmd_vel (the
+watchdog's stop). Real-time (~lockstep false): frames at ~rate_hz of wall clock, the latest
+cmd_vel applied.
 
 Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and perturbations) or
 ~world (a world YAML or name), ~robot (a robot preset of follow_bot/config/robots.yaml whose
@@ -53,7 +52,9 @@ from follow_bot_msgs.ros_image import bgr_to_jpeg_msg, bgr_to_msg, camera_info_m
 from harness.debug_video import DebugView
 from harness.node_cli import BEHAVIOUR_GONE, parse_node_command_line
 from harness.robot_preset import GENERIC, camera_topics, robot_world
-from harness.scenario import ScenarioError, load_scenario, scenario_world
+from harness.scenario import ScenarioError
+from harness.scenario_file import load_scenario
+from harness.scenario_parse import scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
 from harness.validation import ValidationError
 from harness.world import WorldError
