@@ -7,10 +7,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "harness"
 MAX_LINES = 400
 # Still to be split, at their length today: a ceiling, lowered as each is split.
-OVERSIZE = {
-    "fuzz": 1007,
-    "render": 737,
-}
+OVERSIZE = {"fuzz": 1007}
 
 
 def harness_imports(path: Path, modules: set[str]) -> set[str]:

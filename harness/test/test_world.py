@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harness.geometry import polyline_length
-from harness.render import ground_texture
+from harness.ground import ground_texture
 from harness.world import AprilTagMarker, Box, Sphere, WorldError
 from harness.world_file import load_world, parse_world
 

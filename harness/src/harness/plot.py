@@ -11,7 +11,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 
-from harness.render import ground_texture
+from harness.ground import ground_texture
 from harness.world import AprilTagMarker, Box, Sphere, TextureMarker, World
 
 MAX_BACKGROUND_PX = 1000  # the floor image is decimated to at most this many pixels a side
