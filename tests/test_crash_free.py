@@ -12,7 +12,8 @@ import sys
 
 import pytest
 
-from harness.fuzz import NODES, crash_cases
+from harness.fuzz_cases import crash_cases
+from harness.testing import NODES
 
 
 @pytest.fixture(scope="module")

@@ -10,8 +10,8 @@ import subprocess
 import sys
 import time
 
-from harness.fuzz import NODES, pinhole_info, probe_frame
 from harness.processes import WatchedProcess, private_master
+from harness.testing import NODES, pinhole_info, probe_frame
 
 WARNING = "~use_odom: no odometry on"
 SECONDS = 2.5

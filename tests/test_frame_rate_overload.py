@@ -15,8 +15,8 @@ import time
 
 import pytest
 
-from harness.fuzz import NODES, pinhole_info, probe_frame
 from harness.processes import run_with_client
+from harness.testing import NODES, pinhole_info, probe_frame
 
 RATE_HZ = {"parker_tag": 120.0, "parker_sign": 700.0}
 SECONDS = 3.0

@@ -13,7 +13,7 @@ import sys
 
 import pytest
 
-from harness.fuzz import NODES
+from harness.testing import NODES
 
 MESSAGES = 1000
 SEED = 7

@@ -23,8 +23,8 @@ import cv2
 import pytest
 
 from harness.apriltag_image import tag_image
-from harness.fuzz import bgr_msg, floor, odom_msg, pinhole_info, probe_frame
 from harness.processes import run_with_client
+from harness.testing import bgr_msg, floor, odom_msg, pinhole_info, probe_frame
 
 RATE = 30.0
 MUX_TIMEOUT_S = 0.5  # an input silent this long loses the mux (twist_mux's usual timeout)

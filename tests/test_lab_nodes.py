@@ -70,7 +70,7 @@ def contract_client() -> dict:
     import rospy
     from test_idle_contract import Lockstep
 
-    from harness.fuzz import bgr_msg
+    from harness.testing import bgr_msg
 
     rospy.init_node("lab_client", disable_signals=True)
     steps = Lockstep("follow_green_stop_red", reads_camera_info=False)  # colour only

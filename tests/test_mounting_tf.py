@@ -16,8 +16,8 @@ import sys
 import threading
 import time
 
-from harness.fuzz import probe_frame
 from harness.processes import run_with_client
+from harness.testing import probe_frame
 
 WAITING = "waiting for camera mounting"
 # The mounting the client's static tf gives (not the ~params' default 0.30 m, 20 deg, 0 m).

@@ -29,7 +29,8 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.fuzz import (
+from harness.processes import run_with_client
+from harness.testing import (
     FX,
     NODES,
     WIDTH,
@@ -39,7 +40,6 @@ from harness.fuzz import (
     pinhole_info,
     probe_frame,
 )
-from harness.processes import run_with_client
 
 RATE_HZ = 30.0
 SLOW_FRAME_TICKS = 6  # a frame every 6th tick: a 5 Hz camera
