@@ -1,6 +1,6 @@
 """The beacon_chaser node's ~detections on rendered frames, against the renderer's ground truth.
 
-A roscore of its own, the real node, and frames from harness.render.Renderer at known robot
+A ROS master of its own, the real node, and frames from harness.render.Renderer at known robot
 poses (with camera_info): every fully visible sphere is labelled with its colour and its
 centroid lies within 3 px of the silhouette centre the renderer reports; the dumpster's centroid
 within 3 px of its projected outline's; no colour is reported that is not in the frame. Also
@@ -9,6 +9,7 @@ configured as its scenario runs it (approach mode, a box target: no roundness or
 Both nodes are mounted as the worlds' camera (~params): the size gate needs it.
 """
 
+import contextlib
 import dataclasses
 import math
 import os
@@ -25,7 +26,7 @@ from sensor_msgs.msg import CameraInfo, Image
 
 from follow_bot.msg import BeaconDetections
 from follow_bot_msgs.ros_image import bgr_to_msg, camera_info_msg
-from harness.processes import free_port, stop, wait_for_port
+from harness.processes import private_master, stop
 from harness.render import Renderer
 from harness.world import Box, Sphere
 from harness.world_file import load_world
@@ -165,13 +166,10 @@ class NodeUnderTest:
     """beacon_chasers on a roscore of their own; frames in, each one's ~detections out."""
 
     def __init__(self):
-        self.port = free_port()
+        self.master = contextlib.ExitStack()  # closed by close()
+        env = self.master.enter_context(private_master())
         self.saved_master = os.environ.get("ROS_MASTER_URI")  # restored by close()
-        os.environ["ROS_MASTER_URI"] = f"http://127.0.0.1:{self.port}"
-        self.roscore = subprocess.Popen(
-            ["roscore", "-p", str(self.port)], stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
-        )
-        assert wait_for_port(self.port, 20.0)
+        os.environ["ROS_MASTER_URI"] = env["ROS_MASTER_URI"]
         self.nodes = [
             subprocess.Popen(
                 [
@@ -228,9 +226,8 @@ class NodeUnderTest:
 
     def close(self) -> None:
         rospy.signal_shutdown("test done")
-        for node in self.nodes:
-            stop(node)
-        stop(self.roscore)
+        stop(*self.nodes)
+        self.master.close()
         if self.saved_master is None:
             os.environ.pop("ROS_MASTER_URI", None)
         else:

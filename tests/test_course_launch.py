@@ -2,6 +2,7 @@
 lockstep: Ctrl-C leaves the robot with a zero Twist as the last command on /cmd_vel. Every read
 of the processes' output has a timeout (a process that prints nothing cannot hang the test)."""
 
+import contextlib
 import os
 import queue
 import signal
@@ -11,7 +12,7 @@ import time
 
 import pytest
 
-from harness.processes import free_port, stop, wait_for_port
+from harness.processes import private_master, stop
 
 # A closed-loop check of a minute (the lecture launch, two robots), not a bad-input or fault
 # test: `make test-full` plays it, so `make test` keeps within its 12 minutes.
@@ -56,15 +57,13 @@ def twist_values(line: str) -> list[float] | None:
 
 @pytest.mark.parametrize("lockstep", ["false", "true"])
 def test_ctrl_c_ends_with_a_zero_twist(lockstep):
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_IP="127.0.0.1")
-    roscore = subprocess.Popen(
-        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
-    )
     launch = echo = None
     twists = output = None
-    try:
-        assert wait_for_port(port, 20.0)
+    with (
+        private_master(env=dict(os.environ, ROS_IP="127.0.0.1"), roscore=True) as env,
+        contextlib.ExitStack() as cleanup,
+    ):
+        cleanup.callback(lambda: stop(launch, echo))
         echo = subprocess.Popen(
             ["rostopic", "echo", "-p", "/cmd_vel"],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
@@ -94,10 +93,6 @@ def test_ctrl_c_ends_with_a_zero_twist(lockstep):
         while line is not None and twist_values(line) != ZERO:
             line = twists.next(deadline)
         assert line is not None, "no zero Twist after Ctrl-C"
-    finally:
-        stop(launch)
-        stop(echo)
-        stop(roscore)
     last = [line for line in twists.drain() if line and line[0] != "%"][-1]
     assert twist_values(last) == ZERO, last
     output.drain()

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.processes import free_port, stop, wait_for_port
+from harness.processes import private_master, stop
 
 REPO = Path(__file__).resolve().parents[1]
 RATE_HZ = 30.0
@@ -46,7 +46,7 @@ def colcon_install(tmp: Path, packages: list[str]) -> Path:
     return tmp / "install"
 
 
-def installed_env(install: Path, tmp: Path, port: int) -> dict:
+def installed_env(install: Path, tmp: Path) -> dict:
     """The environment `source install/setup.bash` gives a shell with nothing else sourced."""
     clean = {"PATH": "/usr/bin:/bin", "HOME": str(tmp), "LANG": "C.UTF-8"}
     dump = subprocess.run(
@@ -55,42 +55,31 @@ def installed_env(install: Path, tmp: Path, port: int) -> dict:
     )  # fmt: skip
     env = dict(item.split("=", 1) for item in dump.stdout.decode().split("\0") if "=" in item)
     assert "FOLLOW_BOT_VENV" in env  # harness's env hook
-    return dict(env, ROS_MASTER_URI=f"http://127.0.0.1:{port}", ROS_IP="127.0.0.1",
-                ROS_HOME=str(tmp / "ros_home"))  # fmt: skip
-
-
-def start_master(env: dict, port: int) -> subprocess.Popen:
-    roscore = subprocess.Popen(
-        ["roscore", "-p", str(port)], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
-    )
-    assert wait_for_port(port, 30.0, roscore)
-    return roscore
+    return dict(env, ROS_IP="127.0.0.1", ROS_HOME=str(tmp / "ros_home"))
 
 
 @pytest.mark.skipif(shutil.which("colcon") is None, reason="colcon is in tools/debian-packages.txt")
 def test_installed_sim_drives(tmp_path):
     install = colcon_install(tmp_path, ["worlds", "follow_bot_msgs", "harness"])
-    port = free_port()
-    env = installed_env(install, tmp_path, port)
-    worlds = subprocess.run(["rospack", "find", "worlds"], env=env, capture_output=True, text=True)
+    installed = installed_env(install, tmp_path)
+    worlds = subprocess.run(
+        ["rospack", "find", "worlds"], env=installed, capture_output=True, text=True
+    )
     assert worlds.stdout.strip() == str(install / "worlds" / "share" / "worlds")
-    roscore = start_master(env, port)
-    behaviour = None
     record = tmp_path / "record.npz"
-    try:
-        subprocess.run(["rosparam", "set", "use_sim_time", "true"], env=env, check=True)
+    with private_master(sim_time=True, env=installed, roscore=True) as env:
         behaviour = subprocess.Popen(
             ["rosrun", "harness", "constant_twist", "_v:=0.2"],
             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
         )  # fmt: skip
-        sim = subprocess.run(
-            ["rosrun", "harness", "sim", "_world:=course", "_lockstep:=true",
-             "_duration:=1.0", f"_rate_hz:={RATE_HZ}", f"_record:={record}"],
-            env=env, capture_output=True, text=True, timeout=120,
-        )  # fmt: skip
-    finally:
-        stop(behaviour)
-        stop(roscore)
+        try:
+            sim = subprocess.run(
+                ["rosrun", "harness", "sim", "_world:=course", "_lockstep:=true",
+                 "_duration:=1.0", f"_rate_hz:={RATE_HZ}", f"_record:={record}"],
+                env=env, capture_output=True, text=True, timeout=120,
+            )  # fmt: skip
+        finally:
+            stop(behaviour)
     assert sim.returncode == 0, sim.stdout[-2000:] + sim.stderr[-2000:]
     run = np.load(record)
     assert len(run["t"]) == RATE_HZ  # 1 s of frames
@@ -139,21 +128,19 @@ def test_installed_launch_files(tmp_path):
         "follow_bot",
     ]
     install = colcon_install(tmp_path, packages)
-    port = free_port()
-    env = installed_env(install, tmp_path, port)
+    installed = installed_env(install, tmp_path)
     for python in ("/usr/bin/python3", str(REPO / ".venv" / "bin" / "python3")):
         # The bindings from the install space alone, with Debian's and with the venv's numpy.
         imported = subprocess.run(
             [python, "-c", "from follow_bot import core; from image_converter import core as ic; "
              "print(core.__file__); print(ic.__file__)"],
-            env=env, capture_output=True, text=True, check=True,
+            env=installed, capture_output=True, text=True, check=True,
         )  # fmt: skip
         assert imported.stdout.splitlines() == [
             str(next((install / package).glob(f"lib/python3/dist-packages/{package}/core.*.so")))
             for package in ("follow_bot", "image_converter")
         ]  # fmt: skip
-    roscore = start_master(env, port)
-    try:
+    with private_master(env=installed, roscore=True) as env:
         out, twists = drive_then_ctrl_c(
             env, ["follow_bot", "course.launch", "lockstep:=true"], lambda t: t[0] > 0.2
         )
@@ -164,5 +151,3 @@ def test_installed_launch_files(tmp_path):
                 env, ["follow_bot", "park.launch", f"target:={target}"], lambda t: True
             )
             assert "has died" not in out and "cannot start" not in out, out[-3000:]
-    finally:
-        stop(roscore)

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import subprocess
 import sys
 import time
@@ -20,7 +19,7 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.processes import free_port, stop, wait_for_port
+from harness.processes import private_master, stop
 from harness.world import Sphere
 from harness.world_file import load_world
 
@@ -57,20 +56,18 @@ def client(out_png: str) -> None:
 @pytest.fixture(scope="module")
 def capture(tmp_path_factory) -> tuple[dict, np.ndarray | None]:
     out_png = tmp_path_factory.mktemp("panorama") / "panorama.png"
-    port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI=f"http://127.0.0.1:{port}")
-    launch = subprocess.Popen(
-        ["roslaunch", "-p", str(port), "follow_bot", "panorama.launch"],
-        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
-    )  # fmt: skip
-    try:
-        assert wait_for_port(port, 20.0)
-        done = subprocess.run(
-            [sys.executable, __file__, "--client", str(out_png)],
-            env=env, capture_output=True, text=True, timeout=120,
+    with private_master(roscore=True) as env:
+        launch = subprocess.Popen(
+            ["roslaunch", "follow_bot", "panorama.launch"],
+            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
         )  # fmt: skip
-    finally:
-        stop(launch)
+        try:
+            done = subprocess.run(
+                [sys.executable, __file__, "--client", str(out_png)],
+                env=env, capture_output=True, text=True, timeout=120,
+            )  # fmt: skip
+        finally:
+            stop(launch)
     assert done.returncode == 0, done.stdout + done.stderr
     result = json.loads(done.stdout.strip().splitlines()[-1])
     return result, cv2.imread(str(out_png)) if result["success"] else None

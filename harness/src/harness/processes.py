@@ -116,15 +116,19 @@ def stop(*processes: subprocess.Popen | None, timeout: float = 10.0) -> None:
 
 
 @contextmanager
-def private_master(sim_time: bool = False) -> Iterator[dict[str, str]]:
-    """A ROS master of its own on a free port; yields the environment that points at it.
+def private_master(
+    sim_time: bool = False, env: dict[str, str] | None = None, roscore: bool = False
+) -> Iterator[dict[str, str]]:
+    """A ROS master of its own on a free port; yields the environment (`env`, default this
+    process's) pointing at it.
 
     rosmaster alone, as roscore starts it but without roslaunch and the rosout node (nodes publish
-    /rosout all the same): ~0.45 s of CPU to start against roscore's ~1.6. A port another program
-    takes between the probe and the master's bind is tried again with another."""
-    env = dict(os.environ)
+    /rosout all the same): ~0.45 s of CPU to start against roscore's ~1.6; `roscore`: the whole
+    core, for a test that reads /rosout_agg or launches onto it. A port another program takes
+    between the probe and the master's bind is tried again with another."""
+    env = dict(os.environ if env is None else env)
     started = start_master(
-        ["rosmaster", "--core"], env,
+        ["roscore"] if roscore else ["rosmaster", "--core"], env,
         lambda command: subprocess.Popen(
             command, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
         ),
