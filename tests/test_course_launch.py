@@ -1,4 +1,4 @@
-"""`roslaunch follow_bot course.launch` as a person runs it, in real time (the default) and in
+"""`roslaunch harness course.launch` as a person runs it, in real time (the default) and in
 lockstep: Ctrl-C leaves the robot with a zero Twist as the last command on /cmd_vel. Every read
 of the processes' output has a timeout (a process that prints nothing cannot hang the test)."""
 
@@ -70,7 +70,7 @@ def test_ctrl_c_ends_with_a_zero_twist(lockstep):
         )  # fmt: skip
         twists = Lines(echo.stdout)
         launch = subprocess.Popen(
-            ["roslaunch", "follow_bot", "course.launch", f"lockstep:={lockstep}"],
+            ["roslaunch", "harness", "course.launch", f"lockstep:={lockstep}"],
             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
         )  # fmt: skip
         output = Lines(launch.stdout)

@@ -142,12 +142,12 @@ def test_installed_launch_files(tmp_path):
         ]  # fmt: skip
     with private_master(env=installed, roscore=True) as env:
         out, twists = drive_then_ctrl_c(
-            env, ["follow_bot", "course.launch", "lockstep:=true"], lambda t: t[0] > 0.2
+            env, ["harness", "course.launch", "lockstep:=true"], lambda t: t[0] > 0.2
         )
         assert "has died" not in out, out[-3000:]
         assert [float(v) for v in twists[-1].split(",")[1:]] == [0.0] * 6, twists[-1]
         for target in ("apriltag", "sign"):  # any command: the parker runs on its marker
             out, _ = drive_then_ctrl_c(
-                env, ["follow_bot", "park.launch", f"target:={target}"], lambda t: True
+                env, ["harness", "park.launch", f"target:={target}"], lambda t: True
             )
             assert "has died" not in out and "cannot start" not in out, out[-3000:]

@@ -187,7 +187,7 @@ def test_sim_and_follower_drive_in_one_group_ns(tmp_path):
         textwrap.dedent("""\
         <launch>
           <group ns="robot1">
-            <include file="$(find follow_bot)/launch/course.launch">
+            <include file="$(find harness)/launch/course.launch">
               <arg name="lockstep" value="true"/>
               <arg name="duration" value="4"/>
             </include>

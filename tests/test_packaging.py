@@ -1,8 +1,10 @@
 """Packaging: catkin_lint -W2 finds nothing, every launch file documents its arguments
 (`roslaunch --ros-args` shows each one's doc=), and every dependency a package.xml names is a
 rosdep key (so `rosdep install --from-paths . --ignore-src` resolves it). roslaunch's file check
-runs in catkin's run_tests (roslaunch_add_file_check in each package's CMakeLists.txt)."""
+runs in catkin's run_tests (roslaunch_add_file_check in each package's CMakeLists.txt). The
+product packages never need the harness."""
 
+import re
 import subprocess
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -66,3 +68,24 @@ def test_every_dependency_is_a_rosdep_key():
     assert unknown == set()
     # The names the tester's rosdep refused: Debian packages, not keys.
     assert not any({"libvisp-dev", "libapriltag-dev"} & dependencies(m) for m in MANIFESTS)
+
+
+PRODUCT = ("follow_bot", "follow_bot_common", "follow_bot_msgs", "image_converter",
+           "compressed_transport")  # fmt: skip
+
+
+@pytest.mark.parametrize("package", PRODUCT)
+def test_the_product_never_needs_the_harness(package):
+    """A robot installs the product alone: no manifest dependency on the harness or its worlds,
+    no launch file that starts or finds them, no code that imports the harness."""
+    root = REPO / package
+    manifest = ET.parse(root / "package.xml").getroot()
+    depends = {e.text for e in manifest if e.tag.endswith("depend")}
+    assert not depends & {"harness", "worlds"}, depends
+    for path in sorted(root.rglob("*")):
+        if path.suffix == ".launch":
+            text = path.read_text()
+            assert 'pkg="harness"' not in text and "$(find harness)" not in text, path
+            assert "rosrun harness" not in text and "$(find worlds)" not in text, path
+        elif path.suffix == ".py":
+            assert not re.search(r"^\s*(from|import) harness\b", path.read_text(), re.M), path

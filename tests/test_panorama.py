@@ -58,7 +58,7 @@ def capture(tmp_path_factory) -> tuple[dict, np.ndarray | None]:
     out_png = tmp_path_factory.mktemp("panorama") / "panorama.png"
     with private_master(roscore=True) as env:
         launch = subprocess.Popen(
-            ["roslaunch", "follow_bot", "panorama.launch"],
+            ["roslaunch", "harness", "panorama.launch"],
             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
         )  # fmt: skip
         try:

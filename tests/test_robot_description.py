@@ -71,7 +71,7 @@ def test_tf_from_the_launch_equals_the_worlds_camera(which, tmp_path):
     camera = load_world(world_path).camera
     with private_master() as env:
         launch = subprocess.Popen(
-            ["roslaunch", "follow_bot", "course.launch", f"world:={world_path}", "duration:=0"],
+            ["roslaunch", "harness", "course.launch", f"world:={world_path}", "duration:=0"],
             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
         )  # fmt: skip
         try:

@@ -53,7 +53,7 @@ def two_robot_launch(scenario, out: Path) -> Path:
     <remap from="/clock" to="/{ns}/clock"/>
     <remap from="/tf" to="/{ns}/tf"/>
     <remap from="/tf_static" to="/{ns}/tf_static"/>
-    <include file="$(find follow_bot)/launch/robot_description.launch">
+    <include file="$(find harness)/launch/world_description.launch">
       <arg name="world" value="{scenario.world_path}"/>
     </include>
     <include file="$(find {behaviour.package})/launch/{behaviour.launch_file}">

@@ -9,7 +9,7 @@ echo "== parker tag detection + pose vs a bare ViSP vpDetectorAprilTag::detect (
 echo "== parker sign detector tracking vs searching every frame (same frames, one thread, CPU time)"
 "$repo/build/devel/lib/follow_bot/sign_tracking_bench"
 echo "== follow_bot.core from Python vs the same C++ call (process CPU time, same frames, one thread)"
-"${FOLLOW_BOT_VENV:-$repo/.venv}/bin/python3" "$repo/follow_bot/bench/python_core_bench.py"
+"${FOLLOW_BOT_VENV:-$repo/.venv}/bin/python3" "$repo/tools/python_core_bench.py"
 echo "== harness"
 "$repo/harness/scripts/run_python" harness.bench
 echo "== follower image -> cmd_vel latency, across processes and between nodelets (probe nodelet)"

@@ -1,4 +1,4 @@
-// The C++ side of the Python-binding benchmark (follow_bot/bench/python_core_bench.py): times
+// The C++ side of the Python-binding benchmark (tools/python_core_bench.py): times
 // LineDetector::detect (BGR frames), TagDetector::detect (grey frames, default config and
 // camera), SignDetector::detect (grey frames, the sign IMAGE W m wide, default camera) or the pd
 // steering law's step on the LineDetector's measurement of each BGR frame (stamps 1/30 s apart)
