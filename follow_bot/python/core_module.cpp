@@ -1,5 +1,5 @@
 // follow_bot.core: the ROS-free C++ cores from Python, with no logic of their own. The
-// conventions (frames, configs, results) are image_converter/pybind_support.h's; the detectors'
+// conventions (frames, configs, results) are follow_bot_common/pybind_support.h's; the detectors'
 // and controllers' constructors run the same validate() as the configs.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -27,7 +27,7 @@
 #include "follow_bot_common/frame_watchdog.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/velocity_limiter.h"
-#include "image_converter/pybind_support.h"
+#include "follow_bot_common/pybind_support.h"
 
 namespace py = pybind11;
 using namespace py::literals;

@@ -1,5 +1,5 @@
 // image_converter.core: the ROS-free C++ overlay, feature matching and stitching from Python,
-// with no logic of their own. Conventions: image_converter/pybind_support.h.
+// with no logic of their own. Conventions: follow_bot_common/pybind_support.h.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -12,7 +12,7 @@
 
 #include "image_converter/feature_matching.h"
 #include "image_converter/overlay.h"
-#include "image_converter/pybind_support.h"
+#include "follow_bot_common/pybind_support.h"
 #include "image_converter/stitching.h"
 
 namespace py = pybind11;
