@@ -26,8 +26,8 @@
 #include "follow_bot/tag_detector.h"
 #include "follow_bot_common/frame_watchdog.h"
 #include "follow_bot_common/ground_projection.h"
-#include "follow_bot_common/velocity_limiter.h"
 #include "follow_bot_common/pybind_support.h"
+#include "follow_bot_common/velocity_limiter.h"
 
 namespace py = pybind11;
 using namespace py::literals;

@@ -10,9 +10,9 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot_common/pybind_support.h"
 #include "image_converter/feature_matching.h"
 #include "image_converter/overlay.h"
-#include "follow_bot_common/pybind_support.h"
 #include "image_converter/stitching.h"
 
 namespace py = pybind11;
