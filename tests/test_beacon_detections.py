@@ -162,7 +162,7 @@ CHASERS = {
 }
 
 
-class NodeUnderTest:
+class Chasers:
     """beacon_chasers on a roscore of their own; frames in, each one's ~detections out."""
 
     def __init__(self):
@@ -236,7 +236,7 @@ class NodeUnderTest:
 
 @pytest.fixture(scope="module")
 def node():
-    under_test = NodeUnderTest()
+    under_test = Chasers()
     yield under_test
     under_test.close()
     for variant, errors in ERRORS.items():  # shown with pytest -s

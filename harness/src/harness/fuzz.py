@@ -29,7 +29,7 @@ from harness.fuzz_cases import (
     Storm,
     crash_cases,
 )
-from harness.fuzz_driver import PROCESSED_TIMEOUT_S, NodeUnderTest
+from harness.fuzz_driver import PROCESSED_TIMEOUT_S, FuzzedNode
 from harness.processes import private_master
 from harness.testing import NODES
 
@@ -69,9 +69,7 @@ def run_batches(keys, messages, seed, cases, log_dir: Path, pause: float, env: d
     batches = [(case, msgs) for case, msgs in crash_cases().items()] if cases else [("storm", None)]
     for run_index, (case, case_msgs) in enumerate(batches):
         compressed = case in COMPRESSED_CASES
-        nodes = [
-            NodeUnderTest(k, NODES[k], env, log_dir / case, run_index, compressed) for k in keys
-        ]
+        nodes = [FuzzedNode(k, NODES[k], env, log_dir / case, run_index, compressed) for k in keys]
         by_status = {node.diagnostics_name(): node for node in nodes}
         diagnostics.callback = lambda array, nodes=by_status: [
             nodes[s.name].on_diagnostics({kv.key: kv.value for kv in s.values})

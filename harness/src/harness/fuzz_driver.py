@@ -39,7 +39,7 @@ PROCESSED_TIMEOUT_S = 5.0  # for a node's answer to a frame it must accept
 MAX_UNANSWERED = 3
 
 
-class NodeUnderTest:
+class FuzzedNode:
     def __init__(
         self, key: str, spec: NodeSpec, env: dict, log_dir: Path, run: int, compressed: bool
     ):
