@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Style gate: one .clang-format for all C++, ruff for all Python. --fix rewrites instead of checking.
+# Style gate: one .clang-format for all C++, ruff for all Python, mypy on the harness (mypy.ini).
+# --fix rewrites instead of checking.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-ruff=${FOLLOW_BOT_VENV:-.venv}/bin/ruff
+venv=$(realpath "${FOLLOW_BOT_VENV:-.venv}")
+ruff=$venv/bin/ruff
 mapfile -t cpp < <(git ls-files --cached --others --exclude-standard '*.cpp' '*.h' '*.hpp')
 if [ "${1:-}" = "--fix" ]; then
   clang-format -i "${cpp[@]}"
@@ -12,5 +14,6 @@ else
   clang-format --dry-run -Werror "${cpp[@]}"
   "$ruff" check .
   "$ruff" format --check .
+  (cd harness/src && "$venv/bin/mypy" --config-file ../../mypy.ini --no-error-summary -p harness)
 fi
-echo "lint: ok (${#cpp[@]} C++ files, ruff)"
+echo "lint: ok (${#cpp[@]} C++ files, ruff, mypy)"

@@ -11,6 +11,7 @@ import ctypes
 import ctypes.util
 import functools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -133,7 +134,7 @@ def _lib() -> ctypes.CDLL:
 
 
 @functools.cache
-def _free() -> ctypes._CFuncPtr:
+def _free() -> Any:
     """libc free(). Debian's libapriltag.so exports neither image_u8_destroy nor
     matd_destroy (only apriltag_* / tag* / estimate_*); both are plain free() of
     malloc'd blocks in v3 (image_u8: buffer then struct; matd: one block)."""
@@ -242,7 +243,7 @@ def detect(
         for i in range(z.size):
             d = pointers[i]
             det = d.contents
-            kwargs = {}
+            kwargs: dict[str, Any] = {}
             if tag_size is not None and camera_k is not None:
                 info = _DetectionInfo(
                     d,

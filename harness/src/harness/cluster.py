@@ -88,4 +88,4 @@ def run_on_cluster(scenarios: list[Scenario], out: Path, scheduler: str, video: 
             results[futures[future]] = result
             progress.write("\n".join(describe(result)))
             progress.update()
-    return results
+    return [r for r in results if r is not None]  # every one, each future having finished

@@ -53,7 +53,7 @@ def write_contact_sheet(
         frames = {i: frames[i] for i in kept if i in chosen}
     picks = sorted(frames)
     first = frames[picks[0]]
-    height, sheet_w = sheet_size(first.shape[:2], count, columns, width)
+    height, sheet_w = sheet_size((first.shape[0], first.shape[1]), count, columns, width)
     tile_w = sheet_w // columns
     tile_h = height // math.ceil(count / columns)
     sheet = np.zeros((height, sheet_w, 3), np.uint8)
@@ -68,4 +68,4 @@ def write_contact_sheet(
     out.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(out), sheet):
         raise ValueError(f"{out}: cannot write the contact sheet")
-    return sheet.shape[:2]
+    return sheet.shape[0], sheet.shape[1]

@@ -47,16 +47,18 @@ class DebugView:
             self._debug = image
 
     def _on_status(self, msg: rospy.AnyMsg) -> None:
-        if self._status_class is None:
-            self._status_class = roslib.message.get_message_class(msg._connection_header["type"])
-        status = self._status_class().deserialize(msg._buff)
+        status_class = self._status_class
+        if status_class is None:
+            status_class = roslib.message.get_message_class(msg._connection_header["type"])
+            self._status_class = status_class
+        status = status_class().deserialize(msg._buff)
         with self._lock:
             self._status = status
 
     def frame(self, raw: np.ndarray) -> np.ndarray:
         with self._lock:
             debug, status = self._debug, self._status
-        lines = []
+        lines: list[str] = []
         if status is not None:
             lines = [
                 f"state: {status.state}",

@@ -8,6 +8,7 @@ from __future__ import annotations
 import random
 import time
 import zlib
+from typing import Any
 
 import cv2
 import numpy as np
@@ -71,7 +72,7 @@ def broken_camera_infos() -> list:
     (case `broken_camera_info`)."""
     nan = float("nan")
     barrel = [-0.28, 0.07, 0.0, 0.0, 0.0]
-    broken = [
+    broken: list[dict[str, Any]] = [
         {"K": [nan] * 9},
         {"K": [0.0] * 9, "P": [0.0] * 12},
         {"P": [nan] * 12},

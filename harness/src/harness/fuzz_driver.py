@@ -378,6 +378,7 @@ def check_answer(probe: str, answers: list) -> str:
     if probe in ("tag", "sign"):
         z = last.pose.position.z
         expected = expected_range(probe)
+        assert expected is not None  # the marker probes have a range
         if abs(z - expected) > 0.05 * expected or abs(last.pose.position.x) > 0.05:
             return f"marker at z={z:.3f} x={last.pose.position.x:.3f}, expected z={expected:.3f}"
         return ""

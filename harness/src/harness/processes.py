@@ -16,6 +16,7 @@ import time
 import xmlrpc.client
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Any
 
 MASTER_START_TIMEOUT = 20.0  # wall s
 MASTER_START_ATTEMPTS = 3  # a port another program takes between our probe and roscore's bind
@@ -52,13 +53,19 @@ def parent_pid(pid: int) -> int:
         return int(stat.read().rsplit(")", 1)[1].split()[1])
 
 
+def master_call(uri: str, method: str, *args: Any) -> tuple[int, str, Any]:
+    """One ROS master API call by XML-RPC (caller id /run_scenario): (code, message, value)."""
+    code, message, value = getattr(xmlrpc.client.ServerProxy(uri), method)("/run_scenario", *args)
+    return int(code), str(message), value
+
+
 def master_is_ours(port: int, process: subprocess.Popen) -> bool:
     """The master answering on `port` is `process` (a rosmaster) or the rosmaster it started (a
     roscore), not another run's: a free port can be taken by another process between the probe
     and the master's bind."""
     try:
-        code, _, pid = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}").getPid("/run_scenario")
-        return code == 1 and process.pid in (pid, parent_pid(pid))
+        code, _, pid = master_call(f"http://127.0.0.1:{port}", "getPid")
+        return code == 1 and process.pid in (pid, parent_pid(int(pid)))
     except (OSError, xmlrpc.client.Error, ValueError, IndexError):
         return False
 
@@ -81,9 +88,7 @@ def start_master(
 
 def use_sim_time(env: dict[str, str]) -> None:
     """Sets /use_sim_time on the master `env` points at, by XML-RPC (no rosparam process)."""
-    code, message, _ = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"]).setParam(
-        "/run_scenario", "/use_sim_time", True
-    )
+    code, message, _ = master_call(env["ROS_MASTER_URI"], "setParam", "/use_sim_time", True)
     if code != 1:
         raise RuntimeError(f"could not set /use_sim_time: {message}")
 
@@ -91,10 +96,9 @@ def use_sim_time(env: dict[str, str]) -> None:
 def wait_for_node(port: int, node: str, timeout: float, process: subprocess.Popen) -> bool:
     """Whether `node` registers with the master on `port` within `timeout` (giving up once
     `process`, the one starting it, exits)."""
-    master = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{port}")
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and process.poll() is None:
-        if master.lookupNode("/run_scenario", node)[0] == 1:
+        if master_call(f"http://127.0.0.1:{port}", "lookupNode", node)[0] == 1:
             return True
         time.sleep(0.1)
     return False
@@ -175,6 +179,7 @@ class WatchedProcess:
         self._reader.start()
 
     def _read(self) -> None:
+        assert self.process.stdout is not None  # stdout=PIPE
         for line in self.process.stdout:
             self.lines.append(line)
 

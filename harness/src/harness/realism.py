@@ -18,6 +18,7 @@ A numeric option may be a range [low, high]: each run draws its value from the r
 
 from __future__ import annotations
 
+import functools
 import zlib
 from dataclasses import dataclass, fields, replace
 from typing import Any
@@ -183,7 +184,7 @@ def parse_realism(value: Any, where: str) -> dict[str, Any]:
         out.update(PROFILES[profile])
     for key in _OPTION_PARSERS:
         if f.has(key):
-            out[key] = f.get(key, lambda v, w, key=key: _option(key, v, w))
+            out[key] = f.get(key, functools.partial(_option, key))
     if out.get("floor", "plain") not in FLOORS:
         raise ValidationError(f"{f.where('floor')}: one of {', '.join(FLOORS)}")
     if max(np.atleast_1d(out.get("jpeg_quality", 0))) > 100:

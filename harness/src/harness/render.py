@@ -64,7 +64,7 @@ class Renderer:
         self.realism = world.realism if realism is None else realism
         self.rate_hz = rate_hz
         if self.realism != Realism():
-            starts = (tuple(world.robot.start[:2]), *starts)
+            starts = ((world.robot.start[0], world.robot.start[1]), *starts)
             world = with_distractors(world, self.realism, self.seed, list(starts))
         self.world = world
         self.frame = 0  # frame counter keying the noise, so each frame gets fresh noise
@@ -170,6 +170,7 @@ class Renderer:
 
     def _draw_drifting_shadows(self, image: np.ndarray, view: View, t: float) -> None:
         """Darken (and tint) the floor where the drifting shadow bands lie at time t."""
+        assert self._drifting is not None  # called only when shadows drift
         mask = np.zeros(image.shape[:2], np.uint8)
         for quad in self._drifting.quads(t):
             corners = view.to_camera(np.column_stack([quad, np.zeros(len(quad))]))

@@ -197,7 +197,9 @@ def _tag_board(marker: AprilTagMarker) -> tuple[np.ndarray, float]:
     square = np.kron(bits, np.ones((TAG_PX_PER_CELL, TAG_PX_PER_CELL), np.uint8))
     px_per_m = border * TAG_PX_PER_CELL / marker.size
     margin_px = round(marker.margin * px_per_m)
-    board = cv2.copyMakeBorder(square, *[margin_px] * 4, cv2.BORDER_CONSTANT, value=255)
+    board = cv2.copyMakeBorder(
+        square, margin_px, margin_px, margin_px, margin_px, cv2.BORDER_CONSTANT, value=(255,)
+    )
     return board, board.shape[1] / px_per_m
 
 
@@ -358,6 +360,7 @@ class Lens:
         )  # fmt: skip
 
     def apply(self, pinhole_image: np.ndarray) -> np.ndarray:
+        map1, map2 = self.maps
         return cv2.remap(
-            pinhole_image, *self.maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+            pinhole_image, map1, map2, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
         )

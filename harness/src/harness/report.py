@@ -8,7 +8,9 @@ from __future__ import annotations
 import json
 import math
 import shlex
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -66,6 +68,7 @@ def headline_text(run: dict) -> str:
 
 def flatten(values, prefix: str = "") -> dict[str, float]:
     """Every finite number in nested metrics by dotted path (list items by index); no booleans."""
+    items: Iterable[tuple[Any, Any]]
     if isinstance(values, dict):
         items = values.items()
     elif isinstance(values, list):
@@ -293,8 +296,8 @@ def write_plots(out: Path, summary: dict) -> dict[str, str]:
             rule_bounds.update(float(b) for b in row["rule"].split() if _is_float(b))
     plots = {}
     for metric, metric_bounds in sorted(bounds.items()):
-        values = [flatten(run["metrics"] or {}).get(metric) for run in runs if "error" not in run]
-        values = [v for v in values if v is not None]
+        found = [flatten(run["metrics"] or {}).get(metric) for run in runs if "error" not in run]
+        values = [v for v in found if v is not None]
         if len(values) >= 2 and len(set(values)) > 1:
             plots[metric] = f"plots/{metric}.png"
             plot_metric(out / plots[metric], metric, values, sorted(metric_bounds))

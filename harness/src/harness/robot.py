@@ -108,6 +108,8 @@ class Robot:
         mean_weight = self.lag / h * (1.0 - decay) if h > 0.0 else 1.0
         for _ in range(steps):
             start = self.applied
-            mean = tuple(c + (s - c) * mean_weight for s, c in zip(start, command, strict=True))
-            self.pose = integrate_unicycle(self.pose, *mean, h)
-            self.applied = tuple(c + (s - c) * decay for s, c in zip(start, command, strict=True))
+            (v0, w0), (v, w) = start, command
+            self.pose = integrate_unicycle(
+                self.pose, v + (v0 - v) * mean_weight, w + (w0 - w) * mean_weight, h
+            )
+            self.applied = (v + (v0 - v) * decay, w + (w0 - w) * decay)

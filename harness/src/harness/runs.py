@@ -43,11 +43,12 @@ PROGRESS_LOG_STEP = 0.1
 def declared_args(package: str, launch_file: str) -> set[str]:
     """The names of the args a launch file declares at its top level."""
     path = roslaunch.rlutil.resolve_launch_arguments([package, launch_file])[0]
-    return {arg.get("name") for arg in ElementTree.parse(path).getroot().findall("arg")}
+    return {arg.get("name", "") for arg in ElementTree.parse(path).getroot().findall("arg")}
 
 
 def behaviour_command(scenario: Scenario) -> list[str]:
     if scenario.behaviour is None:
+        assert scenario.constant_command is not None  # the scripted driver's
         v, w = scenario.constant_command
         return ["rosrun", "harness", "constant_twist", f"_v:={v}", f"_w:={w}"]
     b = scenario.behaviour
@@ -95,6 +96,7 @@ def show_progress(scenario: Scenario, env: dict, processes: list[subprocess.Pope
             disable=not tty, bar_format="{desc}: {n:.1f}/{total:.0f} sim s {percentage:3.0f}% {bar}"
         ) as bar:  # fmt: skip
             logged = 0.0
+            assert reader.stdout is not None  # stdout=PIPE
             for line in reader.stdout:
                 sim_time = float(line)
                 bar.update(sim_time - bar.n)
@@ -273,4 +275,4 @@ def run_all(
             result = results[futures[future]] = future.result()
             progress.write("\n".join(describe(result)))
             progress.update()
-    return results
+    return [r for r in results if r is not None]  # every one, each future having finished

@@ -88,6 +88,7 @@ class Criterion:
             scale = (self.maximum - self.minimum) / 2.0
         else:
             bound = self.minimum if self.maximum is None else self.maximum
+            assert bound is not None  # a criterion has at least one bound
             scale = abs(bound) or 1.0
         room = [value - self.minimum] if self.minimum is not None else []
         room += [self.maximum - value] if self.maximum is not None else []

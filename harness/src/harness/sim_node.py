@@ -310,7 +310,7 @@ class SimNode:
         video = None
         if self.video_path:
             cam = self.sim.renderer.camera
-            fourcc = cv2.VideoWriter_fourcc(*"mp4v")
+            fourcc = cv2.VideoWriter.fourcc(*"mp4v")
             width = cam.width * (2 if self.debug_view else 1)
             video = cv2.VideoWriter(self.video_path, fourcc, self.rate_hz, (width, cam.height))
         self.clock_pub.publish(Clock())  # ROS time 0 until the pre-roll

@@ -174,7 +174,7 @@ class Simulation:
             seed=p.noise_seed,
             realism=realism,
             rate_hz=rate_hz,
-            starts=(tuple(start[:2]),) if start else (),
+            starts=((start[0], start[1]),) if start else (),
         )
         delay = world.robot.delay_steps if p.delay_steps is None else p.delay_steps
         # The realism's delay in seconds adds whole steps and a fraction of one.

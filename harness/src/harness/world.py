@@ -109,7 +109,7 @@ class TextureMarker:
     """Vertical picture board; its height follows the image aspect ratio."""
 
     name: str
-    path: Path
+    path: Path | None  # the image file; None for a generated picture (realism's posters)
     image: np.ndarray = field(repr=False, compare=False)
     width: float
     pose: tuple[float, float, float, float]

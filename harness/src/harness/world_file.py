@@ -127,14 +127,14 @@ def _parse_line(value: Any, where: str) -> Line:
         if np.any(np.hypot(*np.diff(pts, axis=0).T) == 0.0):
             raise WorldError(f"{f.where('points')}: consecutive points must differ")
         return Line(densify_polyline(pts, closed, CENTRELINE_SPACING), width, colour, closed)
-    start = f.get("start", vector(3))
+    start: tuple[float, float, float] = f.get("start", vector(3))
     seg_where = f.where("segments")
     raw = sequence(f.data["segments"], seg_where, min_len=1)
     segments = [_parse_segment(s, join_path(seg_where, i)) for i, s in enumerate(raw)]
     pts, end = trace_segments(start, segments, CENTRELINE_SPACING)
     if closed:
         gap = math.hypot(end[0] - start[0], end[1] - start[1])
-        turn = abs(wrap_angle(end[2] - start[2]))
+        turn = abs(float(wrap_angle(end[2] - start[2])))
         if gap > _CLOSE_TOL_M or turn > _CLOSE_TOL_RAD:
             raise WorldError(
                 f"{seg_where}: closed path ends {gap:.3f} m and {math.degrees(turn):.1f} deg away "
