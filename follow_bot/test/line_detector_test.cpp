@@ -801,6 +801,25 @@ TEST(LineDetector, FindsTheLineInAShadowOverItAlone) {
   EXPECT_EQ(LineDetector().detect(bare).band.pixel_count, 0);
 }
 
+// A `wood` floor with the line `width` columns from `line_x`, `shadow` relit to `brightness` under
+// the sky's tint, and sensor noise of draw `seed`.
+cv::Mat woodWithLineInShadow(const cv::Scalar& wood, int line_x, int width, const cv::Rect& shadow,
+                             double brightness, int seed) {
+  cv::Mat frame(480, 640, CV_8UC3, wood);
+  frame(cv::Range::all(), cv::Range(line_x, line_x + width)).setTo(kPaint);
+  relight(frame, shadow, brightness, kSkyShadowTint);
+  addSensorNoise(frame, seed);
+  return frame;
+}
+
+// The line found on its centre, from at least half of its pixels (noise tips some dim paint under
+// the margin).
+void expectDimLineFound(const BandMeasurement& band, int line_x, int width) {
+  EXPECT_TRUE(band.found);
+  EXPECT_NEAR(band.centroid_x, line_x + (width - 1) / 2.0, 1.0);
+  EXPECT_GE(band.pixel_count, 20 * width / 2);
+}
+
 // A hard shadow (half the light, sky-tinted) whose edge runs along the line's right side, the
 // line in it (yellowness ~86), lit wood floor beyond (HSV (13, 150, 210), yellowness 84): the
 // shadow covers three quarters of the band (columns 0-479), so the band's light and median
@@ -809,18 +828,13 @@ TEST(LineDetector, FindsTheLineInAShadowOverItAlone) {
 // band's floor in more light sets the test for every pixel about as bright as it: its own floor's
 // threshold, so the lit wood stays out.
 TEST(LineDetector, KeepsTheLitFloorBesideAShadowOut) {
-  const cv::Scalar wood(87, 171, 210);
   const int line_x = 430, width = 50, edge = line_x + width;
   const double centre = line_x + (width - 1) / 2.0;
-  cv::Mat frame(480, 640, CV_8UC3, wood);
-  frame(cv::Range::all(), cv::Range(line_x, line_x + width)).setTo(kPaint);
-  relight(frame, cv::Rect(0, 0, edge, 480), 0.5, kSkyShadowTint);
-  addSensorNoise(frame, 6);
+  const cv::Mat frame = woodWithLineInShadow(cv::Scalar(87, 171, 210), line_x, width,
+                                             cv::Rect(0, 0, edge, 480), 0.5, 6);
   const LineDetector detector;
   const BandMeasurement band = detector.detect(frame).band;
-  EXPECT_TRUE(band.found);
-  EXPECT_NEAR(band.centroid_x, centre, 1.0);
-  EXPECT_GE(band.pixel_count, 20 * width / 2);  // noise tips some dim paint under the margin
+  expectDimLineFound(band, line_x, width);
   const cv::Mat mask = detector.debugMask(frame);
   EXPECT_EQ(cv::countNonZero(mask(cv::Range::all(), cv::Range(edge, 640))), 0);
   // Tracking from a sighting on the line, the same.
@@ -837,18 +851,11 @@ TEST(LineDetector, KeepsTheLitFloorBesideAShadowOut) {
 // far above the paint: the line was lost for 1.5 s. Each block's samples are taken
 // to the band's light before the median and MAD, and the floor is one mode again.
 TEST(LineDetector, FindsThePaintInAShadowBesideLitWoodAsYellow) {
-  const cv::Scalar wood(45, 100, 125);
   const int shadow_x = 300, line_x = 560, width = 50;
-  const double centre = line_x + (width - 1) / 2.0;
-  cv::Mat frame(480, 640, CV_8UC3, wood);
-  frame(cv::Range::all(), cv::Range(line_x, line_x + width)).setTo(kPaint);
-  relight(frame, cv::Rect(shadow_x, 0, 640 - shadow_x, 480), 0.35, kSkyShadowTint);
-  addSensorNoise(frame, 8);
+  const cv::Mat frame = woodWithLineInShadow(cv::Scalar(45, 100, 125), line_x, width,
+                                             cv::Rect(shadow_x, 0, 640 - shadow_x, 480), 0.35, 8);
   const LineDetector detector;
-  const BandMeasurement band = detector.detect(frame).band;
-  EXPECT_TRUE(band.found);
-  EXPECT_NEAR(band.centroid_x, centre, 1.0);
-  EXPECT_GE(band.pixel_count, 20 * width / 2);  // noise tips some dim paint under the margin
+  expectDimLineFound(detector.detect(frame).band, line_x, width);
   const cv::Mat mask = detector.debugMask(frame);
   EXPECT_EQ(cv::countNonZero(mask(cv::Range::all(), cv::Range(0, line_x))), 0);
 }
