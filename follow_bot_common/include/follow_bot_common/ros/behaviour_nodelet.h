@@ -24,6 +24,7 @@
 #include "follow_bot_common/ros/camera_mounting_source.h"
 #include "follow_bot_common/ros/checked_nodelet.h"
 #include "follow_bot_common/ros/command_output.h"
+#include "follow_bot_common/ros/intrinsics_source.h"
 #include "follow_bot_common/ros/node_help.h"
 #include "follow_bot_common/ros/params.h"
 #include "follow_bot_common/ros/rviz_markers.h"
@@ -87,16 +88,13 @@ struct BehaviourOptions {
 //    start-up error names the ~param and fails the load; a ~param the node does not read is
 //    warned about (CheckedNodelet).
 //  * `camera/rgb/camera_info` (queue 1; names relative to the namespace, follow_bot_common/ros/
-//    topics.h): usable intrinsics go into camera() (updateIntrinsics: the rectified camera P
-//    and, unless ~image_rectified says the frames are image_rect, the lens K, D, R whose
-//    distortion the cores undo on the pixels they use), unusable ones are ignored with
-//    a throttled error. A separate subscription, not a CameraSubscriber: a behaviour keeps
-//    running on frames when camera_info is late or missing (then it says what it cannot do).
-//    The intrinsics are those of the frame's size: camera_info's scaled when the frame is its
-//    image resized by one factor (binning, a resized stream, a new camera_info not there yet).
-//    A camera_info that does not describe the frames leaves the intrinsics in force when they
-//    do (a throttled warning); a frame that neither describes is dropped with a throttled error
-//    naming both sizes.
+//    topics.h): usable intrinsics go into camera(), fitted to the frames' size
+//    (IntrinsicsSource; ~image_rectified: the frames are image_rect, D is not applied);
+//    unusable ones are ignored with a throttled error. A separate subscription, not a
+//    CameraSubscriber: a behaviour keeps running on frames when camera_info is late or missing
+//    (then it says what it cannot do). A camera_info that does not describe the frames while
+//    the intrinsics in force do gets a throttled warning; a frame that neither describes is
+//    dropped with a throttled error naming both sizes.
 //  * `camera/rgb/image_raw` (image_transport, queue 1): frame acceptance (encoding, size, step,
 //    stamp checks; a bad frame is dropped with a throttled error; every frame and camera_info
 //    counted under its outcome in the diagnostics, CommandOutput::frameHandled), the camera's
@@ -142,7 +140,7 @@ class BehaviourNodelet : public CheckedNodelet {
   virtual void addMarkers(RvizMarkers& /*markers*/) {}
 
   const CameraGeometry& camera() const { return camera_; }  // mounting and latest intrinsics
-  bool hasIntrinsics() const { return has_intrinsics_; }
+  bool hasIntrinsics() const { return intrinsics_ && intrinsics_->known(); }
   const std::string& cameraInfoTopic() const { return camera_info_topic_; }
   const std::string& imageTopic() const { return image_topic_; }
   CommandOutput& output() { return *output_; }
@@ -198,7 +196,6 @@ class BehaviourNodelet : public CheckedNodelet {
     applied_config_ = readConfig<Config>(pnh);  // throws on bad ~params
     camera_ = readCameraMounting(pnh);
     mounting_ = std::make_unique<CameraMountingSource>(nh, pnh, camera_, getName());
-    image_rectified_ = param(pnh, "image_rectified", false);
     setup(nh, pnh, applied_config_);
     configure(applied_config_);
     output_ = std::make_unique<CommandOutput>(nh, pnh, options_.allow_reverse);
@@ -220,6 +217,8 @@ class BehaviourNodelet : public CheckedNodelet {
           output_->cameraInfoHandled(usable);
         });
     camera_info_topic_ = camera_info_sub_.getTopic();
+    intrinsics_ = std::make_unique<IntrinsicsSource>(param(pnh, "image_rectified", false),
+                                                     camera_info_topic_);
     // ~image_transport (e.g. compressed) read from this nodelet's private namespace, also when
     // it runs in a manager. The base name is resolved first so that a remapping of it also moves
     // the transport's topic (<base>/compressed): image_transport appends to the name as given.
@@ -246,72 +245,22 @@ class BehaviourNodelet : public CheckedNodelet {
 
   // Whether `info` was usable (taken as the intrinsics).
   bool onCameraInfo(const sensor_msgs::CameraInfo& info) {
-    CameraGeometry calibrated = camera_;
-    std::string error = calibratedSizeError(info);
-    if (error.empty()) error = updateIntrinsics(info, image_rectified_, calibrated);
-    if (!error.empty()) {
-      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", error.c_str());
+    const IntrinsicsSource::Update update = intrinsics_->take(info, camera_);
+    if (!update.error.empty()) {
+      NODELET_ERROR_THROTTLE(5.0, "ignoring camera_info: %s", update.error.c_str());
       return false;
     }
-    calibrated_ = calibrated;
-    calibrated_size_ = cv::Size(static_cast<int>(info.width), static_cast<int>(info.height));
-    calibration_pending_ = true;
-    // Taken now when it describes the frames arriving (or none arrived yet); else the next
-    // frame decides (a change of resolution).
-    fitIntrinsics(frame_size_.empty() ? calibrated_size_ : frame_size_);
-    return true;
-  }
-
-  // Both zero (not given) or both a frame's: a size no frame can have is a broken camera_info.
-  static std::string calibratedSizeError(const sensor_msgs::CameraInfo& info) {
-    const bool unset = info.width == 0 && info.height == 0;
-    const bool frame_size = info.width > 0 && info.width <= kMaxDimension && info.height > 0 &&
-                            info.height <= kMaxDimension;
-    if (unset || frame_size) return "";
-    return "its size " + std::to_string(info.width) + "x" + std::to_string(info.height) +
-           " is no frame's (1-" + std::to_string(kMaxDimension) + " each, or both 0)";
-  }
-
-  // camera_'s intrinsics from the last usable camera_info, made those of frames of `size`
-  // (intrinsicsForFrame), and intrinsicsArrived(); false, camera_ unchanged, when such frames
-  // are not its image resized.
-  bool fitIntrinsics(const cv::Size& size) {
-    const std::optional<CameraGeometry> fitted =
-        intrinsicsForFrame(calibrated_, calibrated_size_, size);
-    if (!fitted) return false;
-    const bool changed = !has_intrinsics_ || !sameIntrinsics(*fitted, camera_);
-    camera_.fx = fitted->fx;
-    camera_.fy = fitted->fy;
-    camera_.cx = fitted->cx;
-    camera_.cy = fitted->cy;
-    camera_.lens = fitted->lens;
-    has_intrinsics_ = true;
-    intrinsics_size_ = calibrated_size_.empty() ? cv::Size() : size;  // empty: any size
-    calibration_pending_ = false;
-    intrinsicsArrived(changed);
+    if (update.fitted) intrinsicsArrived(update.changed);
     return true;
   }
 
   // "" when camera_ holds intrinsics for frames of `size` (or no camera_info arrived yet), else
-  // why the frame cannot be used. A camera_info that does not describe the frames while the
-  // intrinsics in force do is taken for broken: they stay (a throttled warning).
+  // why the frame cannot be used.
   std::string intrinsicsFor(const cv::Size& size) {
-    const bool in_force = has_intrinsics_ && (intrinsics_size_.empty() || size == intrinsics_size_);
-    // Fitted already, or no camera_info yet.
-    if (!calibration_pending_ && (in_force || !has_intrinsics_)) return "";
-    if (fitIntrinsics(size)) return "";
-    const std::string described = camera_info_topic_ + " is for " +
-                                  std::to_string(calibrated_size_.width) + "x" +
-                                  std::to_string(calibrated_size_.height);
-    if (in_force) {
-      NODELET_WARN_THROTTLE(5.0,
-                            "%s, not frames of %dx%d: keeping the intrinsics of the last one "
-                            "that was",
-                            described.c_str(), size.width, size.height);
-      return "";
-    }
-    return "the frame is " + std::to_string(size.width) + "x" + std::to_string(size.height) +
-           " but " + described + ", not an image of that shape";
+    const IntrinsicsSource::Update update = intrinsics_->forFrame(size, camera_);
+    if (!update.warning.empty()) NODELET_WARN_THROTTLE(5.0, "%s", update.warning.c_str());
+    if (update.fitted) intrinsicsArrived(update.changed);
+    return update.error;
   }
 
   // Every frame is counted once, under its outcome: one that throws is dropped as an error.
@@ -337,7 +286,6 @@ class BehaviourNodelet : public CheckedNodelet {
     }
     // Only usable frames feed the watchdog: a stream of garbage must stop the robot too.
     output_->frameArrived();
-    frame_size_ = image->image.size();
     const Frame frame{msg->header, image->image, CommandOutput::frameTime(msg->header).toSec()};
     updateDiagnostics();
     const bool mounted = updateMounting(msg->header.frame_id);
@@ -383,13 +331,7 @@ class BehaviourNodelet : public CheckedNodelet {
   Config applied_config_;         // the settings in force, reported back after a rejected update
   CameraGeometry camera_;
   std::unique_ptr<CameraMountingSource> mounting_;
-  bool image_rectified_ = false;  // frames are rectified already: camera_info's D is not applied
-  bool has_intrinsics_ = false;   // camera_ holds intrinsics from a camera_info
-  cv::Size intrinsics_size_;      // the frame size they are for (empty: any)
-  CameraGeometry calibrated_;     // intrinsics as the last usable camera_info gave them
-  cv::Size calibrated_size_;      // its width and height (empty: not given)
-  bool calibration_pending_ = false;  // calibrated_ is not in camera_ yet
-  cv::Size frame_size_;               // the last accepted frame's
+  std::unique_ptr<IntrinsicsSource> intrinsics_;
   std::string camera_info_topic_;
   std::string image_topic_;
   // Declared first among the ROS handles: destroyed last, it sends the final stop.

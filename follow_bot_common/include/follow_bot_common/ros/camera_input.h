@@ -1,23 +1,17 @@
 // Camera input: glue between sensor_msgs/Image and the ROS-free frame checks (the one way every
-// node in the project accepts a camera frame), camera_info to intrinsics, and the last-resort
-// guard around every callback.
+// node in the project accepts a camera frame), and the last-resort guard around every callback.
+// camera_info to intrinsics: intrinsics_source.h.
 #pragma once
 
-#include <algorithm>
 #include <exception>
-#include <optional>
 #include <string>
 
 #include <cv_bridge/cv_bridge.h>
-#include <image_geometry/pinhole_camera_model.h>
 #include <ros/console.h>
-#include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
-#include <sensor_msgs/distortion_models.h>
 #include <sensor_msgs/image_encodings.h>
 #include <boost/make_shared.hpp>
 
-#include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/image_frame.h"
 
 namespace follow_bot {
@@ -64,64 +58,6 @@ bool guardedCallback(const char* what, Work&& work) {
     ROS_ERROR_THROTTLE(1.0, "%s: dropped after an unexpected error: %s", what, error.what());
   }
   return false;
-}
-
-// How many distortion coefficients a CameraInfo distortion_model takes (0: a model OpenCV's
-// undistortPoints cannot apply).
-inline size_t distortionSize(const std::string& model) {
-  if (model == sensor_msgs::distortion_models::PLUMB_BOB) return 5;
-  if (model == sensor_msgs::distortion_models::RATIONAL_POLYNOMIAL) return 8;
-  return 0;
-}
-
-inline bool sameLens(const std::optional<CameraLens>& a, const std::optional<CameraLens>& b) {
-  if (!a || !b) return !a && !b;
-  return a->camera_matrix == b->camera_matrix && a->distortion == b->distortion &&
-         a->rectification == b->rectification;
-}
-
-// Whether `a` and `b` have the same intrinsics (the rectified camera and the lens).
-inline bool sameIntrinsics(const CameraGeometry& a, const CameraGeometry& b) {
-  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && sameLens(a.lens, b.lens);
-}
-
-// The intrinsics side of `camera` from a CameraInfo, through image_geometry's PinholeCameraModel:
-// the rectified camera from P (K when P is all zero, an uncalibrated P) and, for raw frames
-// (`image_rectified` false) through a lens with distortion, the lens (K, D, R) the cores rectify
-// their pixels with. Frames already rectified (image_proc's image_rect) use P alone. They are the
-// intrinsics of images of the CameraInfo's width and height (intrinsicsForFrame fits them to
-// other frame sizes). Returns "" on success, otherwise why the message was ignored (`camera` then
-// unchanged).
-inline std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, bool image_rectified,
-                                    CameraGeometry& camera) {
-  image_geometry::PinholeCameraModel model;
-  model.fromCameraInfo(info);
-  const cv::Matx33d k = model.fullIntrinsicMatrix();
-  const cv::Matx34d p = model.fullProjectionMatrix();
-  const bool p_unset = p == cv::Matx34d::zeros();
-  CameraGeometry updated = camera;
-  updated.fx = p_unset ? k(0, 0) : p(0, 0);
-  updated.fy = p_unset ? k(1, 1) : p(1, 1);
-  updated.cx = p_unset ? k(0, 2) : p(0, 2);
-  updated.cy = p_unset ? k(1, 2) : p(1, 2);
-  updated.lens.reset();
-  const bool distorted = std::any_of(info.D.begin(), info.D.end(), [](double d) { return d != 0; });
-  if (!image_rectified && distorted) {
-    const size_t size = distortionSize(info.distortion_model);
-    if (size == 0) {
-      return "distortion_model '" + info.distortion_model +
-             "' is not supported (plumb_bob, rational_polynomial), or send rectified frames";
-    }
-    if (info.D.size() != size) {
-      return "D of a " + info.distortion_model + " lens must have " + std::to_string(size) +
-             " coefficients, got " + std::to_string(info.D.size());
-    }
-    updated.lens = CameraLens{k, info.D, model.rotationMatrix()};
-  }
-  const std::string error = validate(updated);
-  if (!error.empty()) return error;
-  camera = updated;
-  return "";
 }
 
 }  // namespace follow_bot
