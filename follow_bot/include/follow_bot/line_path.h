@@ -58,14 +58,11 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/line_controller.h"
+#include "follow_bot/path_geometry.h"
 #include "follow_bot/steering_law.h"
 #include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
-
-// The displacement over the exact arc of `distance` m turning `turn` rad, in the frame at its
-// start (x forward, y left).
-cv::Point2d arcDisplacement(double distance, double turn);
 
 // Uses config.path, the limits and min_confidence; its fallback is a PdLaw on the same config.
 // Speed: linear = max_linear, lowered (not below min_linear) so that |linear * c| <=
