@@ -18,115 +18,11 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/FollowerDefaults.h"
+#include "follow_bot/hsv_box.h"
+#include "follow_bot/line_band.h"
 #include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
-
-// A colour in OpenCV's 8-bit HSV: H in 0..179 (degrees / 2), S and V in 0..255.
-struct HsvColor {
-  int h = 0;
-  int s = 0;
-  int v = 0;
-};
-
-// Exact, fast membership test for an HSV box: contains(b, g, r) is true exactly when
-// cv::inRange(cv::cvtColor(pixel, COLOR_BGR2HSV), lower, upper) would be 255.
-//
-// How: with max = max(b, g, r) and chroma = max - min(b, g, r), OpenCV's V is max, its S depends
-// only on (max, chroma) and rises with chroma, and its H depends only on (chroma, n) where n is
-// the hue numerator of the max channel's sector (g - b, b - r + 2 chroma or r - g + 4 chroma,
-// plus 6 chroma when negative). H rises with n from 0 to 179 except for a short tail that
-// rounds to 180 and wraps to 0, so any H interval is at most two runs of n. The box is thus
-// "chroma in a window chosen by max" and "n in one of two windows chosen by chroma". The
-// window tables are filled at construction by running cv::cvtColor itself over every
-// (max, chroma) and every (chroma, n), so they agree with the linked OpenCV by construction;
-// the constructor throws std::runtime_error if that OpenCV breaks the run structure, and the
-// unit tests check the equivalence over all 2^24 colours.
-class HsvBox {
- public:
-  // Inclusive bounds, as for cv::inRange. An empty box (some lower > upper) matches nothing.
-  HsvBox(const HsvColor& lower, const HsvColor& upper);
-
-  bool contains(int b, int g, int r) const {
-    const int max = std::max(std::max(b, g), r);
-    const int chroma = max - std::min(std::min(b, g), r);
-    // OpenCV's sector rule: red is the max channel on ties, then green.
-    int n = max == r ? g - b : max == g ? b - r + 2 * chroma : r - g + 4 * chroma;
-    n += n < 0 ? 6 * chroma : 0;
-    return containsDecomposed(max, chroma, n);
-  }
-
-  // contains() for a pixel already reduced to its max channel, chroma and shifted hue
-  // numerator n (all as above), for callers that compute those in bulk.
-  bool containsDecomposed(int max, int chroma, int n) const {
-    const std::array<Window, 2>& hue_windows = hue_numerator_by_chroma_[chroma];
-    // Bitwise & and | keep this branch-free: callers feed it pixels near the box edges.
-    return chroma_by_value_[max].contains(chroma) &
-           (hue_windows[0].contains(n) | hue_windows[1].contains(n));
-  }
-
-  // A cheap necessary condition for contains(), for vectorised pre-screening: every pixel in
-  // the box has min_value <= max <= max_value and
-  // min_saturation * max <= 255 * chroma <= max_saturation * max (all products fit 16 bits).
-  struct Screen {
-    int min_value = 255;
-    int max_value = 0;
-    int min_saturation = 255;
-    int max_saturation = 0;
-  };
-  const Screen& screen() const { return screen_; }
-
- private:
-  // An inclusive integer range [first, first + span]; the default one is empty.
-  struct Window {
-    int first = 1 << 20;  // beyond every value looked up, so x - first < 0
-    unsigned span = 0;
-    bool empty() const { return first == Window().first; }
-    int last() const { return first + static_cast<int>(span); }
-    // One unsigned comparison: x below first wraps to a huge value.
-    bool contains(int x) const { return static_cast<unsigned>(x - first) <= span; }
-  };
-
-  std::array<Window, 256> chroma_by_value_;
-  std::array<std::array<Window, 2>, 256> hue_numerator_by_chroma_;
-  Screen screen_;
-};
-
-// A horizontal band of image rows centred on the floor `distance_m` ahead of base_link (in the
-// image's centre column), `rows` tall. Its height stays in rows, not a depth of floor: the line's
-// width in pixels already shrinks with distance, and a fixed row count keeps the pixel count
-// (min_pixels) and the centroid's noise about the same wherever the band lands.
-struct BandConfig {
-  double distance_m = FollowerDefaults::band_distance;
-  int rows = FollowerDefaults::band_rows;
-};
-
-// The continuous image row (pixel centres at integers) where the floor point `distance_m` ahead
-// of base_link on its x axis appears: the inverse of pixelToGround at u = cx. Empty when that
-// point is not in front of the camera (on or behind its image plane) or the input is not finite.
-std::optional<double> groundToRow(const CameraGeometry& camera, double distance_m);
-
-// Where a band lands in a frame `image_height` rows tall.
-struct BandPlacement {
-  int row_begin = 0;  // rows [row_begin, row_end)
-  int row_end = 0;
-  // m ahead of base_link of the floor at the centre of the placed band (NaN when that row sees
-  // no floor: a camera that sees none).
-  double distance_m = 0.0;
-  // The requested distance is outside the floor the camera sees with margin, so the band was
-  // moved to the nearest rows that do: the bottom of the image (too near), or
-  // kMinDepressionDeg below the horizon (too far).
-  bool clamped = false;
-};
-
-// Rays less than this far below the horizon are not used: the floor there is too far away and
-// too foreshortened for a line to be measured.
-constexpr double kMinDepressionDeg = 2.0;
-
-// The band's rows for this camera: centred on groundToRow(band.distance_m), then clamped into
-// [first row at least kMinDepressionDeg below the horizon, image bottom]; a camera that sees no
-// such floor gets the bottom rows (clamped). A frame shorter than the band gets all its rows.
-BandPlacement placeBand(const CameraGeometry& camera, const BandConfig& band, int image_height);
 
 // Defaults: cfg/Follower.cfg's (FollowerDefaults, generated).
 struct LineDetectorConfig {
@@ -180,64 +76,6 @@ struct LineDetectorConfig {
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field.
 std::string validate(const LineDetectorConfig& config);
-
-struct BandMeasurement {
-  // The band's fitted floor test: line pixels have min(R, G) - B >= this (0 without the test)
-  // where the band is lit, and >= block_min_yellowness[x / 128] in the column block of x.
-  int min_yellowness = 0;
-  std::vector<int> block_min_yellowness;
-  // pixel_count >= min_pixels and, where the band holds several blobs, one of those measured
-  // alone has min_pixels.
-  bool found = false;
-  int pixel_count = 0;  // line pixels in the band: the lecture's m00 / 255
-  // Centroid in full-image pixel coordinates (pixel index, as cv::moments); valid whenever
-  // pixel_count > 0, including below min_pixels.
-  double centroid_x = 0.0;
-  double centroid_y = 0.0;
-  // Horizontal offset of the centroid from width / 2; positive = line right of image centre.
-  double error_px = 0.0;
-  double error_normalised = 0.0;  // error_px / (width / 2), within [-1, 1]
-  // 0..1: (fraction of scanned rows holding line pixels) x (width sanity), where width sanity
-  // is 1 while the mean width per occupied row is <= max_width_fraction of the image width and
-  // falls linearly to 0 at the full width. A thin line through the band scores 1; a frame
-  // entirely of line colour is found but scores 0; a line ending inside the band scores low.
-  double confidence = 0.0;
-  // The line's centre: the centroid of the line pixels in whole runs only. A row's run of line
-  // pixels that reaches the image's left or right edge is cut there, so its middle is not the
-  // line's: where a curve enters or leaves the view the centroid lies up to half a line width
-  // off the line (on the floor), while a whole run's middle is on it (a row sees the floor at
-  // one depth, so along a row the image is an affine map of the floor). The path law places its
-  // sightings with floorCentre() (the spans below); the centroid above stays the lecture's.
-  int centre_pixel_count = 0;  // line pixels in runs that reach neither side edge
-  // centre_pixel_count >= min_pixels, in at least 5 rows (all of a shorter band): over fewer the
-  // line crosses the rows too obliquely for floorCentre() to place its centre.
-  bool centre_found = false;
-  double centre_x = 0.0;  // full-image pixel coordinates, valid when centre_pixel_count > 0
-  double centre_y = 0.0;
-  // Each scanned row's whole runs, top to bottom (rows without any left out): where the line's
-  // edges cross that row. floorCentre() measures the line's centre on the floor from them.
-  struct RowSpan {
-    double row = 0.0;    // pixel centres at integers, as centre_y
-    double left = 0.0;   // the left edge of the row's first whole run (its first pixel - 0.5)
-    double right = 0.0;  // the right edge of its last (last pixel + 0.5)
-  };
-  std::vector<RowSpan> spans;
-  int row_begin = 0;  // rows actually scanned: [row_begin, row_end)
-  int row_end = 0;
-  double distance_m = 0.0;  // and the rest of the band's placeBand() result
-  bool clamped = false;
-};
-
-// The line's centre on the floor (base_link: x forward, y left, m) from the band's row spans.
-// A curve crosses a far band's rows obliquely, over many columns, so the centroid of its patch
-// (centre_x) lies inside the curve, by 0.3-0.9 cm on a 1 m curve seen 1.2 m ahead; a span's
-// middle is off the line too where its row cuts the line obliquely. Instead the spans' edges are
-// projected to the floor, where the line's two edges are parallel curves, and one quadratic
-// across the patch's principal axis (a line for two rows, a constant for one) is fitted to both
-// at once, the edges at plus and minus half the line's width from it; the centre is that curve
-// at the rows' mean along the axis. Frames through a lens are rectified first. Empty without
-// spans or when an edge does not project to the floor.
-std::optional<cv::Point2d> floorCentre(const BandMeasurement& band, const CameraGeometry& camera);
 
 struct LineMeasurement {
   std::string error;  // why the frame was rejected; empty when it was processed
