@@ -699,6 +699,8 @@ void bindParkingServo(py::module_& m) {
       .def_readwrite("max_linear", &Config::max_linear)
       .def_readwrite("max_angular", &Config::max_angular)
       .def_readwrite("search_rate", &Config::search_rate)
+      .def_readwrite("search_step_rad", &Config::search_step_rad)
+      .def_readwrite("search_pause", &Config::search_pause)
       .def_readwrite("lost_timeout", &Config::lost_timeout)
       .def_readwrite("position_tolerance", &Config::position_tolerance)
       .def_readwrite("lateral_tolerance", &Config::lateral_tolerance)

@@ -41,7 +41,7 @@ std::optional<MarkerObservation> observe(const Pose2D& robot, const CameraGeomet
   marker.translation = world_to_cam * (cv::Vec3d(0, 0, camera.height_m) - cam_position);
   const double h = kTagSize / 2;
   int i = 0;
-  for (const cv::Vec3d corner :
+  for (const cv::Vec3d& corner :
        {cv::Vec3d(-h, -h, 0), cv::Vec3d(h, -h, 0), cv::Vec3d(h, h, 0), cv::Vec3d(-h, h, 0)}) {
     const cv::Vec3d p = marker.rotation * corner + marker.translation;
     if (p[2] <= 0.05) return std::nullopt;
@@ -139,6 +139,30 @@ TEST(ParkingServo, SearchesUntilSeenThenHoldsWhenLost) {
   EXPECT_EQ(command.angular, 0.0);
   servo.update(observe(Pose2D{2.0, 0.0, kPi}, config.camera), 0.0);
   EXPECT_EQ(servo.state(), ParkingState::kApproaching);
+}
+
+TEST(ParkingServo, SearchesInStepsHeldStill) {
+  ParkingServoConfig config;
+  config.search_rate = -1.0;  // right first
+  config.search_step_rad = 30.0 * kPi / 180.0;
+  config.search_pause = 1.0;
+  const double turn_s = config.search_step_rad;  // at 1 rad/s
+  ParkingServo servo(config);
+  // Frames at 30 Hz from t = 10 s: 30 deg to the right, a second still, the next 30 deg.
+  double turned = 0.0;
+  for (int frame = 0; frame < 60; ++frame) {
+    const double t = 10.0 + frame / 30.0;
+    const Twist2D command = servo.update(std::nullopt, t);
+    EXPECT_EQ(command.linear, 0.0);
+    const bool turning = t - 10.0 < turn_s || (t - 10.0 >= turn_s + 1.0);
+    EXPECT_EQ(command.angular, turning ? -1.0 : 0.0) << t;
+    turned += command.angular / 30.0;
+  }
+  EXPECT_NEAR(turned, -config.search_step_rad - (2.0 - turn_s - 1.0), 1.0 / 30.0);
+
+  config.search_pause = 0.0;  // turns without stopping
+  ParkingServo continuous(config);
+  for (double t : {0.0, 0.6, 1.2}) EXPECT_EQ(continuous.update(std::nullopt, t).angular, -1.0);
 }
 
 TEST(ParkingServo, HiddenMidApproachStillParks) {

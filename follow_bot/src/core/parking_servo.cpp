@@ -72,6 +72,8 @@ std::string validate(const ParkingServoConfig& config) {
            requirePositive("max_linear", config.max_linear),
            requirePositive("max_angular", config.max_angular),
            requireInRange("search_rate", config.search_rate, -3.2, 3.2),
+           requirePositive("search_step_rad", config.search_step_rad),
+           requireAtLeast("search_pause", config.search_pause, 0.0),
            requireAtLeast("lost_timeout", config.lost_timeout, 0.0),
            requirePositive("position_tolerance", config.position_tolerance),
            requirePositive("lateral_tolerance", config.lateral_tolerance),
@@ -189,6 +191,16 @@ Twist2D ParkingServo::servo(const MarkerObservation& marker, double depth_goal,
   return {linear, clampAbs(angular, config_.max_angular)};
 }
 
+// Turning for search_step at search_rate, then still for search_pause, from the search's start.
+Twist2D ParkingServo::search(double time_s) {
+  if (!search_started_s_) search_started_s_ = time_s;
+  const double rate = std::copysign(config_.search_rate, search_direction_);
+  if (config_.search_pause <= 0.0 || rate == 0.0) return {0.0, rate};
+  const double turn_s = config_.search_step_rad / std::abs(rate);
+  const double phase = std::fmod(time_s - *search_started_s_, turn_s + config_.search_pause);
+  return {0.0, phase < turn_s ? rate : 0.0};
+}
+
 Twist2D ParkingServo::update(const std::optional<MarkerObservation>& marker, double time_s) {
   if (!marker || !(marker->translation[2] > 0.0)) {
     last_error_.reset();
@@ -200,8 +212,9 @@ Twist2D ParkingServo::update(const std::optional<MarkerObservation>& marker, dou
     // Never seen, or lost too long (it left the view): turn toward where it was last seen.
     state_ = ParkingState::kSearching;
     impl_->aligning = false;
-    return {0.0, std::copysign(config_.search_rate, search_direction_)};
+    return search(time_s);
   }
+  search_started_s_.reset();
   last_seen_s_ = time_s;
   search_direction_ = marker->translation[0] > 0.0 ? -1.0 : 1.0;  // right of centre: turn right
   seen_ = true;

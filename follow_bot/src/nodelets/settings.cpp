@@ -164,6 +164,8 @@ ParkingServoConfig parkingServoConfig(const ParkerConfig& cfg, const CameraGeome
   config.max_linear = cfg.max_linear;
   config.max_angular = cfg.max_angular;
   config.search_rate = cfg.search_rate;
+  config.search_step_rad = cfg.search_step_deg * kDegToRad;
+  config.search_pause = cfg.search_pause;
   config.lost_timeout = cfg.lost_timeout;
   config.position_tolerance = cfg.position_tolerance;
   config.lateral_tolerance = cfg.lateral_tolerance;
