@@ -25,7 +25,8 @@ nodes: deps
 	mkdir -p $(CATKIN_BUILD)
 	touch $(BUILD)/CATKIN_IGNORE $(BUILD)/COLCON_IGNORE
 	cd $(CATKIN_BUILD) && cmake $(REPO) -DCATKIN_DEVEL_PREFIX=$(DEVEL) \
-	  -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 >/dev/null
+	  -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+	  -DCMAKE_EXPORT_COMPILE_COMMANDS=ON >/dev/null
 	$(MAKE) -C $(CATKIN_BUILD) -j$(JOBS) --no-print-directory
 
 # Everything, with the gtest binaries.
@@ -39,7 +40,8 @@ demo: nodes
 	@echo "demo: plot  $(OUT)/follower/lap_default/run.png"
 	@echo "demo: video $(OUT)/follower/lap_default/camera.mp4"
 
-lint: deps
+# Style and static checks; clang-tidy needs the build's compile commands and generated headers.
+lint: nodes
 	tools/lint.sh
 
 format: deps

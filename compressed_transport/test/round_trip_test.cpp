@@ -102,7 +102,7 @@ sensor_msgs::ImageConstPtr roundTrip(const std::string& topic, const sensor_msgs
   image_transport::ImageTransport transport(nh);
   Link link(transport, nh, topic);
   if (!deliver(link.publisher, sent, link.received, 0)) return nullptr;
-  const sensor_msgs::ImageConstPtr got = link.received.last();
+  sensor_msgs::ImageConstPtr got = link.received.last();
   EXPECT_EQ(got->encoding, "bgr8");
   EXPECT_EQ(link.received.lastFormat(), format);
   return got;

@@ -112,7 +112,7 @@ class LatencyProbeNodelet : public nodelet::Nodelet {
     timer_ = nh.createWallTimer(ros::WallDuration(1.0 / rate), &LatencyProbeNodelet::onTick, this);
   }
 
-  void onTick(const ros::WallTimerEvent&) {
+  void onTick(const ros::WallTimerEvent& /*event*/) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (done_) return;
     if (!connected_ && !waitForConnections()) return;
@@ -156,7 +156,7 @@ class LatencyProbeNodelet : public nodelet::Nodelet {
     return false;
   }
 
-  void onCmdVel(const geometry_msgs::TwistConstPtr&) {
+  void onCmdVel(const geometry_msgs::TwistConstPtr& /*msg*/) {
     const Clock::time_point received = Clock::now();  // before waiting for the lock
     std::lock_guard<std::mutex> lock(mutex_);
     if (!sent_at_ || received < *sent_at_) {

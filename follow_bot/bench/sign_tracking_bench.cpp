@@ -73,6 +73,7 @@ int main() {
   const cv::Mat reference = cv::imread(PARKING_SIGN_IMAGE, cv::IMREAD_GRAYSCALE);
   const std::vector<Truth> sequence = makeSequence();
   std::vector<cv::Mat> frames;
+  frames.reserve(kFrames);
   for (int i = 0; i < kFrames; ++i) {
     frames.push_back(follow_bot::test::renderSign(reference, camera, sequence[i].rotation,
                                                   sequence[i].translation, kNoiseSigma, i + 1));

@@ -51,13 +51,13 @@ void printBand(const char* name, const follow_bot::BandMeasurement& band) {
 }
 
 void printLine(const follow_bot::LineMeasurement& m) {
-  std::printf("\"image_width\": %d, \"image_height\": %d", m.image_width, m.image_height);
+  std::printf(R"("image_width": %d, "image_height": %d)", m.image_width, m.image_height);
   printBand("band", m.band);
   printBand("look_ahead", m.look_ahead);
 }
 
 void printBlobs(const follow_bot::BlobResult& result) {
-  std::printf("\"image_width\": %d, \"image_height\": %d, \"colours\": [", result.image_width,
+  std::printf(R"("image_width": %d, "image_height": %d, "colours": [)", result.image_width,
               result.image_height);
   for (size_t i = 0; i < result.colours.size(); ++i) {
     const follow_bot::ColourBlob& b = result.colours[i];
@@ -77,7 +77,7 @@ void printBlobs(const follow_bot::BlobResult& result) {
 }
 
 void printTwist(const follow_bot::Twist2D& twist) {
-  std::printf("\"linear\": %.17g, \"angular\": %.17g", twist.linear, twist.angular);
+  std::printf(R"("linear": %.17g, "angular": %.17g)", twist.linear, twist.angular);
 }
 
 // --steer MODE FRAME...: one law over the frames, as the follower drives it.
@@ -101,7 +101,7 @@ int steer(int argc, char** argv) {
     // A base without delay: what was sent after the last frame is what it did.
     applied =
         law->step({detector.detect(frame), (i - 3) * kFramePeriod, applied, applied, std::nullopt});
-    std::printf("{\"frame\": \"%s\", ", argv[i]);
+    std::printf(R"({"frame": "%s", )", argv[i]);
     printTwist(applied);
     std::printf(", \"state\": \"%s\"}\n", follow_bot::toString(law->state()));
   }
@@ -125,9 +125,9 @@ int park(int argc, char** argv) {
     }
     const follow_bot::Twist2D twist =
         servo.update(detector.detect(frame, camera), (i - 5) * kFramePeriod);
-    std::printf("{\"frame\": \"%s\", ", argv[i]);
+    std::printf(R"({"frame": "%s", )", argv[i]);
     printTwist(twist);
-    std::printf(", \"state\": \"%s\", \"error\": ", follow_bot::toString(servo.state()));
+    std::printf(R"(, "state": "%s", "error": )", follow_bot::toString(servo.state()));
     if (const auto& e = servo.lastError()) {
       std::printf(
           "{\"along\": %.17g, \"lateral\": %.17g, \"heading\": %.17g, \"phi\": %.17g, "
@@ -168,7 +168,7 @@ int main(int argc, char** argv) {
       std::cerr << "core_reference: cannot read frame '" << argv[i] << "'\n";
       return 1;
     }
-    std::printf("{\"frame\": \"%s\", ", argv[i]);
+    std::printf(R"({"frame": "%s", )", argv[i]);
     if (line) {
       printLine(line_detector.detect(frame));
     } else {

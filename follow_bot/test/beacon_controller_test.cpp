@@ -480,7 +480,7 @@ BlobResult blobs(std::vector<ColourBlob> colours) {
   BlobResult result;
   result.image_width = kWidth;
   result.image_height = kHeight;
-  result.colours = colours;
+  result.colours = std::move(colours);
   return result;
 }
 

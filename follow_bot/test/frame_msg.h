@@ -10,8 +10,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace follow_bot {
-namespace test {
+namespace follow_bot::test {
 
 inline sensor_msgs::Image bgrFrame(const cv::Mat& bgr, const ros::Time& stamp) {
   std_msgs::Header header;
@@ -37,5 +36,4 @@ inline std::vector<sensor_msgs::Image> malformedFrames(const sensor_msgs::Image&
   return bad;
 }
 
-}  // namespace test
-}  // namespace follow_bot
+}  // namespace follow_bot::test

@@ -65,7 +65,7 @@ class Course {
     return *this;
   }
   Course& gap(double from, double length) {
-    gaps_.push_back({from, from + length});
+    gaps_.emplace_back(from, from + length);
     return *this;
   }
   double length() const { return arc_length_.back(); }
@@ -119,7 +119,7 @@ class Course {
 
   void advance(double step, double turn) {
     if (points_.empty()) {
-      points_.push_back({0.0, 0.0});
+      points_.emplace_back(0.0, 0.0);
       arc_length_.push_back(0.0);
     }
     // Midpoint heading: exact chords of the arc.
@@ -815,7 +815,7 @@ TEST(PathLawClosedLoop, CompensatesTheActuationDelay) {
     scenario.pixel_noise = 0.5;
     scenario.max_time = 120.0;
     scenario.delay = delay;
-    const Trace run = simulate(scenario);
+    Trace run = simulate(scenario);
     char name[64];
     std::snprintf(name, sizeof name, "delay %3.0f ms, latency %3.0f ms", delay * 1e3,
                   latency * 1e3);

@@ -132,7 +132,7 @@ double processCpuMs() {
 
 void printObservation(const std::string& frame, const follow_bot::MarkerObservation* seen,
                       double detect_ms, double detect_cpu_ms) {
-  std::printf("{\"frame\": \"%s\", \"detect_ms\": %.3f, \"detect_cpu_ms\": %.3f, \"found\": %s",
+  std::printf(R"({"frame": "%s", "detect_ms": %.3f, "detect_cpu_ms": %.3f, "found": %s)",
               frame.c_str(), detect_ms, detect_cpu_ms, seen ? "true" : "false");
   if (seen) {
     const cv::Vec3d& t = seen->translation;
@@ -145,7 +145,7 @@ void printObservation(const std::string& frame, const follow_bot::MarkerObservat
     for (size_t i = 0; i < seen->corners.size(); ++i) {
       std::printf("%s[%.17g, %.17g]", i ? ", " : "", seen->corners[i].x, seen->corners[i].y);
     }
-    std::printf("], \"quality\": %.17g, \"reprojection_error_px\": %.17g", seen->quality,
+    std::printf(R"(], "quality": %.17g, "reprojection_error_px": %.17g)", seen->quality,
                 seen->reprojection_error_px);
   }
   std::printf("}\n");

@@ -17,8 +17,7 @@
 #include <string>
 #include <vector>
 
-namespace follow_bot {
-namespace test {
+namespace follow_bot::test {
 
 class NodeAnswers {
  public:
@@ -160,5 +159,4 @@ class NodeAnswers {
   std::map<std::string, long> counters_;
 };
 
-}  // namespace test
-}  // namespace follow_bot
+}  // namespace follow_bot::test

@@ -12,8 +12,7 @@
 
 #include "follow_bot_common/ground_projection.h"
 
-namespace follow_bot {
-namespace test {
+namespace follow_bot::test {
 
 constexpr double kSignWidthM = 0.40;  // worlds/parking_sign.yaml
 constexpr int kSignFrameWidth = 640;
@@ -75,5 +74,4 @@ inline double angleBetween(const cv::Matx33d& a, const cv::Matx33d& b) {
   return std::acos(std::max(-1.0, std::min(1.0, c)));
 }
 
-}  // namespace test
-}  // namespace follow_bot
+}  // namespace follow_bot::test

@@ -16,8 +16,7 @@ extern "C" {
 
 #include "follow_bot_common/ground_projection.h"
 
-namespace follow_bot {
-namespace test {
+namespace follow_bot::test {
 
 // Draws tag36h11 `id` whose black square has edge `size_m`, marker frame (x right, y down,
 // z into the tag) at rotation `rotation` and translation `translation` in the optical frame.
@@ -85,5 +84,4 @@ inline TagView viewFrom(double along, double right, double yaw) {
   return view;
 }
 
-}  // namespace test
-}  // namespace follow_bot
+}  // namespace follow_bot::test

@@ -151,6 +151,7 @@ void bindStitching(py::module_& m) {
       "stitch_many",
       [](const std::vector<py::handle>& images, const MatchOptions& options) {
         std::vector<cv::Mat> views;
+        views.reserve(images.size());
         for (const py::handle& image : images) views.push_back(greyOrBgrView(image));
         py::gil_scoped_release unlocked;
         return stitchMany(views, options);
@@ -171,6 +172,7 @@ void bindStitching(py::module_& m) {
       [](const std::vector<py::handle>& images, const std::vector<double>& yaws,
          const TurningCamera& camera) {
         std::vector<cv::Mat> views;
+        views.reserve(images.size());
         for (const py::handle& image : images) views.push_back(matView(image, 3));
         py::gil_scoped_release unlocked;
         return stitchByRotation(views, yaws, camera);

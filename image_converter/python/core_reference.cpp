@@ -32,7 +32,7 @@ constexpr const char* kUsage =
     "result field (doubles exact).\n";
 
 void printPair(const image_converter::PairMatch& p) {
-  std::printf("{\"error\": \"%s\", \"homography\": [", p.error.c_str());
+  std::printf(R"({"error": "%s", "homography": [)", p.error.c_str());
   for (int k = 0; k < 9; ++k) std::printf("%s%.17g", k ? ", " : "", p.homography(k / 3, k % 3));
   std::printf(
       "], \"keypoints_a\": %d, \"keypoints_b\": %d, \"matches\": %d, \"inliers\": %d, "
@@ -48,8 +48,8 @@ void printPair(const image_converter::PairMatch& p) {
 }
 
 void printStitch(const image_converter::StitchResult& r) {
-  std::printf("{\"error\": \"%s\", \"origin_of_first\": [%.17g, %.17g], \"pairs\": [",
-              r.error.c_str(), r.origin_of_first.x, r.origin_of_first.y);
+  std::printf(R"({"error": "%s", "origin_of_first": [%.17g, %.17g], "pairs": [)", r.error.c_str(),
+              r.origin_of_first.x, r.origin_of_first.y);
   for (size_t i = 0; i < r.pairs.size(); ++i) {
     std::printf("%s", i ? ", " : "");
     printPair(r.pairs[i]);

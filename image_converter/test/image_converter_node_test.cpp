@@ -93,7 +93,7 @@ void expectImageEquals(const sensor_msgs::Image& msg, const cv::Mat& expected) {
   for (int r = 0; r < expected.rows; ++r) {
     for (int c = 0; c < expected.cols; ++c) {
       const uint8_t* got = &msg.data[r * msg.step + c * 3];
-      const cv::Vec3b want = expected.at<cv::Vec3b>(r, c);
+      const cv::Vec3b& want = expected.at<cv::Vec3b>(r, c);
       if (got[0] != want[0] || got[1] != want[1] || got[2] != want[2]) ++mismatches;
     }
   }

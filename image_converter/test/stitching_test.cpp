@@ -85,7 +85,7 @@ double overlapMad(const cv::Mat& image, const cv::Point2d& a_origin, const TwoVi
       const cv::Point2d in_a = cv::Point2d(col, row) - a_origin;
       if (!a_inner.contains(in_a) || !b_inner.contains(applyHomography(a_to_b, in_a))) continue;
       const cv::Point scene_pixel = cv::Point(cvRound(in_a.x), cvRound(in_a.y)) + views.a_offset;
-      const cv::Vec3b got = image.at<cv::Vec3b>(row, col);
+      const cv::Vec3b& got = image.at<cv::Vec3b>(row, col);
       const cv::Vec3b want = views.scene.at<cv::Vec3b>(scene_pixel);
       for (int ch = 0; ch < 3; ++ch) sum += std::abs(got[ch] - want[ch]);
       count += 3;

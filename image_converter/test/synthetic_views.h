@@ -6,8 +6,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace image_converter {
-namespace testing {
+namespace image_converter::testing {
 
 // A busy, deterministic texture (shapes of random colour on smoothed noise) with enough corners
 // for ORB and SIFT everywhere; a light blur keeps resampling errors small.
@@ -54,5 +53,4 @@ inline cv::Mat cylinderView(const cv::Mat& cylinder, double f, const cv::Size& v
   return view;
 }
 
-}  // namespace testing
-}  // namespace image_converter
+}  // namespace image_converter::testing

@@ -45,9 +45,11 @@ class HsvBox {
   // numerator n (all as above), for callers that compute those in bulk.
   bool containsDecomposed(int max, int chroma, int n) const {
     const std::array<Window, 2>& hue_windows = hue_numerator_by_chroma_[chroma];
-    // Bitwise & and | keep this branch-free: callers feed it pixels near the box edges.
-    return chroma_by_value_[max].contains(chroma) &
-           (hue_windows[0].contains(n) | hue_windows[1].contains(n));
+    // Bitwise & and | (on ints, as bools would invite && and ||) keep this branch-free:
+    // callers feed it pixels near the box edges.
+    const int value_in = chroma_by_value_[max].contains(chroma);
+    const int hue_in = static_cast<int>(hue_windows[0].contains(n)) | hue_windows[1].contains(n);
+    return (value_in & hue_in) != 0;
   }
 
   // A cheap necessary condition for contains(), for vectorised pre-screening: every pixel in

@@ -260,7 +260,8 @@ std::string checkColoursDetected(const BeaconControllerConfig& controller,
   } else {
     used = {{"target_colour", controller.target_colour}};
   }
-  for (const auto& [field, name] : used) {
+  for (const auto& [field, colour] : used) {
+    const std::string& name = colour;  // a lambda may not capture a structured binding (C++17)
     const bool detected = std::any_of(detector.colours.begin(), detector.colours.end(),
                                       [&](const ColourSpec& spec) { return spec.name == name; });
     if (!detected) {

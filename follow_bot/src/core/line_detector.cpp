@@ -173,17 +173,20 @@ void visitCandidates(const HsvBox& box, const FloorTest& floor, const uchar* bgr
                         hue_numerator(b_high, g_high, r_high, max_high, chroma_high));
     for (; bits != 0; bits &= bits - 1) {
       const int lane = ::trailingZeros32(bits);
+      // & on ints, not &&: branch-free (a coin toss near the box edges, see above).
+      const int in_box =
+          box.containsDecomposed(max_lanes[lane], chroma_lanes[lane], numerator_lanes[lane]);
       visit(x + lane,
-            box.containsDecomposed(max_lanes[lane], chroma_lanes[lane], numerator_lanes[lane]) &
-                floor.passesAtItsBrightness(max_lanes[lane], yellow_lanes[lane]));
+            (in_box & floor.passesAtItsBrightness(max_lanes[lane], yellow_lanes[lane])) != 0);
     }
   }
 #endif
   for (const uchar* pixel = bgr_row + 3 * x; x < cols; ++x, pixel += 3) {
     const int yellow = yellowness(pixel[0], pixel[1], pixel[2]);
-    visit(x, box.contains(pixel[0], pixel[1], pixel[2]) &
-                 (yellow >= block_min_yellowness[x / kShadeBlockColumns]) &
-                 floor.passesAtItsBrightness(std::max({pixel[0], pixel[1], pixel[2]}), yellow));
+    const int in_box = box.contains(pixel[0], pixel[1], pixel[2]);
+    const int yellow_enough = yellow >= block_min_yellowness[x / kShadeBlockColumns];
+    visit(x, (in_box & yellow_enough &
+              floor.passesAtItsBrightness(std::max({pixel[0], pixel[1], pixel[2]}), yellow)) != 0);
   }
 }
 

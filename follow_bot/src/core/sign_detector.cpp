@@ -279,6 +279,7 @@ bool SignDetector::refineHomography(const cv::Mat& gray, const CameraGeometry& c
   std::vector<cv::Point2d> outline_view;
   cv::perspectiveTransform(outline, outline_view, plane_to_view);
   std::vector<cv::Point> polygon;
+  polygon.reserve(outline_view.size());
   for (const cv::Point2d& p : outline_view)
     polygon.emplace_back(cvRound(p.x * 16), cvRound(p.y * 16));
   cv::Mat mask = cv::Mat::zeros(size, CV_8UC1);
@@ -393,6 +394,7 @@ std::optional<SignDetector::Matches> SignDetector::trackInto(const cv::Mat& gray
   cv::Mat searched = last_frame_(cv::Rect(sign.tl(), size * f));
   if (f > 1) cv::resize(searched, searched, size, 0, 0, cv::INTER_AREA);
   std::vector<cv::Point> polygon;
+  polygon.reserve(outline.size());
   for (const cv::Point2f& p : outline) {
     polygon.emplace_back(cvRound((p.x - sign.x) * 16 / f), cvRound((p.y - sign.y) * 16 / f));
   }
@@ -509,6 +511,7 @@ std::optional<MarkerObservation> SignDetector::poseFrom(const cv::Mat& gray,
   cv::Matx33d plane_to_image = matches.plane_to_image;
   if (camera.lens) {
     std::vector<cv::Point2f> inlier_plane;
+    inlier_plane.reserve(inlier_object.size());
     for (const cv::Point3f& p : inlier_object) inlier_plane.emplace_back(p.x, p.y);
     const cv::Mat through_inliers = cv::findHomography(inlier_plane, inlier_image);
     if (through_inliers.empty()) return std::nullopt;

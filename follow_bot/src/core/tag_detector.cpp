@@ -221,9 +221,9 @@ std::optional<TagDetector::Quad> TagDetector::findQuad(const cv::Mat& gray,
     quad->decision_margin = best->decision_margin;
     // apriltag's pixel centres are at half-integer coordinates (pixel (0, 0) spans [0, 1]), ours
     // and the intrinsics' at integers (OpenCV, ROS CameraInfo, ViSP).
-    for (int i = 0; i < 4; ++i) {
-      quad->corners.emplace_back(best->p[i][0] - kApriltagPixelCentre,
-                                 best->p[i][1] - kApriltagPixelCentre);
+    for (const auto& corner : best->p) {
+      quad->corners.emplace_back(corner[0] - kApriltagPixelCentre,
+                                 corner[1] - kApriltagPixelCentre);
     }
   }
   apriltag_detections_destroy(detections);

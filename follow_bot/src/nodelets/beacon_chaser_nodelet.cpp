@@ -48,7 +48,8 @@ std::string metres(double range) {
 
 class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
  private:
-  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const BeaconChaserConfig&) override {
+  void setup(ros::NodeHandle& /*nh*/, ros::NodeHandle& pnh,
+             const BeaconChaserConfig& /*config*/) override {
     startup_ = beaconStartupConfig(pnh);
   }
 
@@ -61,7 +62,7 @@ class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
     controller_ = std::make_unique<BeaconController>(settings_.controller);
   }
 
-  void advertise(ros::NodeHandle&, ros::NodeHandle& pnh) override {
+  void advertise(ros::NodeHandle& /*nh*/, ros::NodeHandle& pnh) override {
     detections_pub_ = pnh.advertise<BeaconDetections>("detections", 1);
     for (const ColourSpec& colour : settings_.detector.colours) {  // Lab 5 step 3: one flag each
       found_pubs_.push_back(pnh.advertise<std_msgs::Bool>(colour.name + "_found", 1));

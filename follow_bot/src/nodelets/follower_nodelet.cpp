@@ -38,7 +38,7 @@ std::vector<cv::Point2d> predictedArc(const Twist2D& command, double horizon_s, 
 
 class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
  private:
-  void setup(ros::NodeHandle& nh, ros::NodeHandle& pnh, const FollowerConfig&) override {
+  void setup(ros::NodeHandle& nh, ros::NodeHandle& pnh, const FollowerConfig& /*config*/) override {
     // On by default: every real base publishes odom and lags its commands by 50-150 ms, which
     // the commands alone cannot tell path mode's memory.
     use_odom_ = param(pnh, "use_odom", true);
@@ -51,7 +51,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
     }
   }
 
-  void advertise(ros::NodeHandle&, ros::NodeHandle& pnh) override {
+  void advertise(ros::NodeHandle& /*nh*/, ros::NodeHandle& pnh) override {
     status_pub_ = pnh.advertise<LineStatus>("line", 1);
   }
 

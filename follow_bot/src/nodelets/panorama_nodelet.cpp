@@ -29,7 +29,8 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
                           /*debug_image=*/false, /*markers=*/false}) {}
 
  private:
-  void setup(ros::NodeHandle&, ros::NodeHandle& pnh, const PanoramaConfig&) override {
+  void setup(ros::NodeHandle& /*nh*/, ros::NodeHandle& pnh,
+             const PanoramaConfig& /*config*/) override {
     matching_ = readConfig<image_converter::MatchingConfig>(pnh);  // image_converter's ~params
   }
 
@@ -52,10 +53,10 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
 
   // The intrinsics and the mounting are read from camera() when stitching: a capture keeps its
   // schedule.
-  void intrinsicsArrived(bool) override {}
+  void intrinsicsArrived(bool /*changed*/) override {}
   void mountingChanged() override {}
 
-  bool onCapture(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& response) {
+  bool onCapture(std_srvs::Trigger::Request& /*request*/, std_srvs::Trigger::Response& response) {
     std::unique_lock<boost::recursive_mutex> lock(mutex());
     const std::string missing = !session_->hasPose() ? "no pose yet on " + odom_sub_.getTopic()
                                 : !hasIntrinsics()   ? "no camera_info yet on " + cameraInfoTopic()
@@ -89,7 +90,7 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
   }
 
   // The frame is answered first: stitching takes a while and the base should not wait for it.
-  void report(const Frame& frame, const Twist2D&) override {
+  void report(const Frame& frame, const Twist2D& /*sent*/) override {
     if (!session_->stitchDue()) return;
     const CaptureStitch stitched = session_->stitch(camera());
     capture_srv_->notify();

@@ -26,7 +26,8 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
   ParkerNodelet() : BehaviourNodelet({/*allow_reverse=*/true}) {}
 
  private:
-  void setup(ros::NodeHandle&, ros::NodeHandle&, const ParkerConfig& config) override {
+  void setup(ros::NodeHandle& /*nh*/, ros::NodeHandle& /*pnh*/,
+             const ParkerConfig& config) override {
     NODELET_INFO("parking in front of the %s at %.2f m", config.target.c_str(), config.standoff);
   }
 
@@ -44,13 +45,13 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
     }
   }
 
-  void advertise(ros::NodeHandle&, ros::NodeHandle& pnh) override {
+  void advertise(ros::NodeHandle& /*nh*/, ros::NodeHandle& pnh) override {
     pose_pub_ = pnh.advertise<geometry_msgs::PoseStamped>("target_pose", 1);
     state_pub_ = pnh.advertise<std_msgs::String>("state", 1);
   }
 
   // The servo keeps the marker inside this camera's view; its approach goes on.
-  void intrinsicsArrived(bool) override { servo_->setIntrinsics(camera()); }
+  void intrinsicsArrived(bool /*changed*/) override { servo_->setIntrinsics(camera()); }
 
   Decision step(const Frame& frame) override {
     marker_.reset();
@@ -71,7 +72,7 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
     return {desired, !parked, state_};
   }
 
-  void report(const Frame& frame, const Twist2D&) override {
+  void report(const Frame& frame, const Twist2D& /*sent*/) override {
     std_msgs::String state;
     state.data = state_;
     state_pub_.publish(state);

@@ -50,7 +50,7 @@ std::string mountingFromTransform(const cv::Vec3d& origin, const cv::Matx33d& ro
   mounted.height_m = origin[2] + base_height_m;
   mounted.pitch_rad = pitch;
   mounted.x_offset_m = origin[0];
-  const std::string invalid = validate(mounted);
+  std::string invalid = validate(mounted);
   if (!invalid.empty()) return invalid;
   warning.clear();
   if (std::abs(origin[1]) > kSidewaysToleranceM) {

@@ -46,8 +46,8 @@ std::shared_ptr<SharedTfListener> sharedTfListener(const ros::NodeHandle& nh) {
 }  // namespace
 
 CameraMountingSource::CameraMountingSource(ros::NodeHandle& nh, const ros::NodeHandle& pnh,
-                                           const CameraGeometry& fallback, std::string name)
-    : name_(std::move(name)), fallback_(fallback) {
+                                           CameraGeometry fallback, std::string name)
+    : name_(std::move(name)), fallback_(std::move(fallback)) {
   const std::string source = param<std::string>(pnh, "camera_mounting", "tf");
   if (source != "tf" && source != "params") {
     throw std::invalid_argument("~camera_mounting must be 'tf' or 'params', got '" + source + "'");

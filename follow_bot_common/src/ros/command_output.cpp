@@ -210,7 +210,7 @@ bool CommandOutput::onEnable(std_srvs::SetBool::Request& request,
 
 void CommandOutput::publish(const Twist2D& command) { publisher_.publish(twistMsg(command)); }
 
-void CommandOutput::checkWatchdog(const ros::TimerEvent&) {
+void CommandOutput::checkWatchdog(const ros::TimerEvent& /*event*/) {
   guardedCallback("watchdog", [this] { checkWatchdogNow(); });
 }
 
@@ -230,7 +230,7 @@ void CommandOutput::checkWatchdogNow() {
   updater_.update();
 }
 
-void CommandOutput::checkWallWatchdog(const ros::SteadyTimerEvent&) {
+void CommandOutput::checkWallWatchdog(const ros::SteadyTimerEvent& /*event*/) {
   guardedCallback("wall watchdog", [this] {
     std::lock_guard<std::mutex> lock(mutex_);
     const double ros_now = ros::Time::now().toSec();

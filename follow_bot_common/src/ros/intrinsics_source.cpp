@@ -71,7 +71,7 @@ std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, bool image_rec
     }
     updated.lens = CameraLens{k, info.D, model.rotationMatrix()};
   }
-  const std::string error = validate(updated);
+  std::string error = validate(updated);
   if (!error.empty()) return error;
   camera = updated;
   return "";

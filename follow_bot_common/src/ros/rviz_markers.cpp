@@ -1,3 +1,5 @@
+#include <utility>
+
 #include "follow_bot_common/ros/rviz_markers.h"
 
 namespace follow_bot {
@@ -23,7 +25,7 @@ std_msgs::ColorRGBA rgba(double red, double green, double blue, double alpha) {
   return colour;
 }
 
-RvizMarkers::RvizMarkers(const std_msgs::Header& header) : header_(header) {
+RvizMarkers::RvizMarkers(std_msgs::Header header) : header_(std::move(header)) {
   visualization_msgs::Marker clear;
   clear.header = header_;
   clear.action = visualization_msgs::Marker::DELETEALL;

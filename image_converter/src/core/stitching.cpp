@@ -161,6 +161,7 @@ StitchResult stitchMany(const std::vector<cv::Mat>& images, const MatchOptions& 
   }
 
   std::vector<cv::Mat> bgr;
+  bgr.reserve(images.size());
   for (const cv::Mat& image : images) bgr.push_back(toBgr(image));
   const cv::Ptr<cv::Stitcher> stitcher = cv::Stitcher::create(cv::Stitcher::PANORAMA);
   stitcher->setFeaturesFinder(createDetector(options));

@@ -149,7 +149,7 @@ class BehaviourNodelet : public CheckedNodelet {
   // Adds the status "<node>: <name>" to /diagnostics (next to CommandOutput's "<node>:
   // behaviour"): what `report()` says, asked under mutex() at most every ~diagnostic_period,
   // before each accepted frame's step() and on updateDiagnostics().
-  void addDiagnostics(const std::string& name, std::function<StatusReport()> report) {
+  void addDiagnostics(const std::string& name, const std::function<StatusReport()>& report) {
     if (!diagnostics_) {
       noteParamRead(getPrivateNodeHandle(), "diagnostic_period");  // read by the Updater
       diagnostics_ = std::make_unique<diagnostic_updater::Updater>(

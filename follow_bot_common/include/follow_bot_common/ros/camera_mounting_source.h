@@ -39,8 +39,8 @@ class CameraMountingSource {
 
   // Reads the ~params above from `pnh`; `fallback` is the mounting the ~params give. Throws
   // std::invalid_argument naming a bad ~param. `name` prefixes the log messages.
-  CameraMountingSource(ros::NodeHandle& nh, const ros::NodeHandle& pnh,
-                       const CameraGeometry& fallback, std::string name);
+  CameraMountingSource(ros::NodeHandle& nh, const ros::NodeHandle& pnh, CameraGeometry fallback,
+                       std::string name);
 
   // The mounting for a frame from the camera frame `frame_id`: writes it into `camera` (the
   // intrinsics untouched) and returns true once known; false while waiting for tf. `changed`:

@@ -92,9 +92,9 @@ class CommandOutput {
   void stopLocked();
   void publish(const Twist2D& command);
   bool onEnable(std_srvs::SetBool::Request& request, std_srvs::SetBool::Response& response);
-  void checkWatchdog(const ros::TimerEvent&);
+  void checkWatchdog(const ros::TimerEvent& /*event*/);
   void checkWatchdogNow();
-  void checkWallWatchdog(const ros::SteadyTimerEvent&);
+  void checkWallWatchdog(const ros::SteadyTimerEvent& /*event*/);
   void stopForOutage(const char* clock, const FrameWatchdog& watchdog, double now);
   void reportFrameRate(diagnostic_updater::DiagnosticStatusWrapper& status);
   void reportStatus(diagnostic_updater::DiagnosticStatusWrapper& status);

@@ -305,7 +305,8 @@ std::string applyOrKeep(ConfigT& config, ConfigT& in_force, Apply apply) {
 // The camera's mounting over `defaults`: ~camera_height (m, > 0), ~camera_pitch_deg (deg, down
 // positive, within (-89, 89)), ~camera_x_offset (m, forward of base_link, finite). Intrinsics
 // arrive later with camera_info. Throws std::invalid_argument naming the first bad value.
-inline CameraGeometry readCameraMounting(const ros::NodeHandle& pnh, CameraGeometry defaults = {}) {
+inline CameraGeometry readCameraMounting(const ros::NodeHandle& pnh,
+                                         const CameraGeometry& defaults = {}) {
   CameraGeometry camera = defaults;
   camera.height_m = positiveParam(pnh, "camera_height", defaults.height_m);
   const double pitch_deg = checkedParam(

@@ -20,7 +20,7 @@ std_msgs::ColorRGBA rgba(double red, double green, double blue, double alpha = 1
 class RvizMarkers {
  public:
   // `header`: the base frame and the camera frame's stamp.
-  explicit RvizMarkers(const std_msgs::Header& header);
+  explicit RvizMarkers(std_msgs::Header header);
 
   // Small spheres on the floor, one per point.
   void floorPoints(const std::string& ns, const std::vector<cv::Point2d>& points,
