@@ -148,17 +148,19 @@ TEST(ParkingServo, SearchesInStepsHeldStill) {
   config.search_pause = 1.0;
   const double turn_s = config.search_step_rad;  // at 1 rad/s
   ParkingServo servo(config);
-  // Frames at 30 Hz from t = 10 s: 30 deg to the right, a second still, the next 30 deg.
+  // Frames at 30 Hz from t = 10 s: a full turn to the right, then 30 deg and a second still,
+  // then the next step begins.
+  const double full_turn_s = 2.0 * kPi;
   double turned = 0.0;
-  for (int frame = 0; frame < 60; ++frame) {
+  for (int frame = 0; frame < 30 * (full_turn_s + turn_s + 1.0); ++frame) {
     const double t = 10.0 + frame / 30.0;
     const Twist2D command = servo.update(std::nullopt, t);
     EXPECT_EQ(command.linear, 0.0);
-    const bool turning = t - 10.0 < turn_s || (t - 10.0 >= turn_s + 1.0);
-    EXPECT_EQ(command.angular, turning ? -1.0 : 0.0) << t;
+    EXPECT_EQ(command.angular, t - 10.0 < full_turn_s + turn_s ? -1.0 : 0.0) << t;
     turned += command.angular / 30.0;
   }
-  EXPECT_NEAR(turned, -config.search_step_rad - (2.0 - turn_s - 1.0), 1.0 / 30.0);
+  EXPECT_NEAR(turned, -(2.0 * kPi + config.search_step_rad), 1.0 / 30.0);
+  EXPECT_EQ(servo.update(std::nullopt, 10.0 + full_turn_s + turn_s + 1.01).angular, -1.0);
 
   config.search_pause = 0.0;  // turns without stopping
   ParkingServo continuous(config);

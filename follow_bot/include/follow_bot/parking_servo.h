@@ -14,13 +14,14 @@
 // squares the heading up. Parked = position, lateral, heading and the command all within
 // tolerance; a disturbance beyond twice the tolerances starts the approach again.
 //
-// Searching: rotate at search_rate until the marker is first seen, in steps of search_step,
-// each followed by search_pause held still: a frame taken while turning is smeared (1 rad/s
-// over a 25 ms exposure is 14 px on a 640 px, 60 deg camera), and a textured sign far away is
-// then not found, so the detector gets still frames to look at. Steps of half the view leave
-// no bearing unseen. Lost (seen before, not in this frame): hold still and resume as soon as
-// it is seen again; after lost_timeout without it (it left the view rather than being hidden)
-// search again, turning toward where it was last.
+// Searching: rotate at search_rate until the marker is first seen: one full turn, then in steps
+// of search_step, each followed by search_pause held still. A frame taken while turning is
+// smeared (1 rad/s over a 25 ms exposure is 14 px on a 640 px, 60 deg camera): a near marker is
+// still found in the first turn, a textured sign far away is not, and the steps give the
+// detector still frames to look at. Steps within the view leave no bearing unseen. Lost (seen
+// before, not in this frame): hold still and resume as soon as it is seen again; after lost_timeout
+// without it (it left the view rather than being hidden) search again, turning toward where it was
+// last.
 #pragma once
 
 #include <memory>

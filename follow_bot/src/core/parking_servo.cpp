@@ -191,13 +191,16 @@ Twist2D ParkingServo::servo(const MarkerObservation& marker, double depth_goal,
   return {linear, clampAbs(angular, config_.max_angular)};
 }
 
-// Turning for search_step at search_rate, then still for search_pause, from the search's start.
+// One full turn at search_rate from the search's start; then turns of search_step at
+// search_rate, each followed by search_pause still.
 Twist2D ParkingServo::search(double time_s) {
   if (!search_started_s_) search_started_s_ = time_s;
   const double rate = std::copysign(config_.search_rate, search_direction_);
   if (config_.search_pause <= 0.0 || rate == 0.0) return {0.0, rate};
+  const double stepping_s = time_s - *search_started_s_ - 2.0 * M_PI / std::abs(rate);
+  if (stepping_s < 0.0) return {0.0, rate};
   const double turn_s = config_.search_step_rad / std::abs(rate);
-  const double phase = std::fmod(time_s - *search_started_s_, turn_s + config_.search_pause);
+  const double phase = std::fmod(stepping_s, turn_s + config_.search_pause);
   return {0.0, phase < turn_s ? rate : 0.0};
 }
 
