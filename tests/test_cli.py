@@ -5,7 +5,9 @@ exits 0 (starting nothing), bad usage exits 2 with the problem and the usage on 
 import json
 import os
 import re
+import signal
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -140,3 +142,33 @@ def test_a_behaviour_dead_at_launch_ends_its_run_as_could_not_run(tmp_path):
     assert "0/1 passed (1 could not run)" in done.stdout, done.stdout
     result = json.loads((tmp_path / "out" / "summary.json").read_text())["runs"][0]
     assert result["error"].startswith("the behaviour under test is not running"), result
+
+
+def test_run_scenario_stopped_by_sigterm_leaves_no_process_of_its_runs(tmp_path):
+    """Killed mid-run (a `timeout`, a cancelled job), run_scenario stops its runs' ROS graphs:
+    each one's roscore, simulator, behaviour and robot description, whose command lines or
+    logs name the run's folder, must all be gone."""
+    scenario = tmp_path / "long.yaml"
+    scenario.write_text(
+        "name: killed\nworld: course\nduration: 200.0\n"
+        "behaviour: {launch: follow_bot follower.launch}\n"
+        "criteria: {lap.complete: {equals: true}}\n"
+    )
+    out = tmp_path / "out"
+    run_scenario = subprocess.Popen(
+        [*TOOLS["run_scenario"], str(scenario), "--out", str(out)],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+
+    def processes_of_the_run() -> list[str]:
+        listing = subprocess.run(["ps", "-eo", "pid=,args="], capture_output=True, text=True)
+        return [line for line in listing.stdout.splitlines()
+                if str(out) in line and str(run_scenario.pid) != line.split()[0]]  # fmt: skip
+
+    deadline = time.monotonic() + 120
+    while not any("sim_node" in line for line in processes_of_the_run()):
+        assert time.monotonic() < deadline and run_scenario.poll() is None, "the run never began"
+        time.sleep(0.5)
+    run_scenario.terminate()
+    assert run_scenario.wait(timeout=30) == 128 + signal.SIGTERM
+    assert processes_of_the_run() == []

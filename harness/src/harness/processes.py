@@ -23,6 +23,25 @@ MASTER_START_ATTEMPTS = 3  # a port another program takes between our probe and 
 
 _ports_lock = threading.Lock()
 _ports_handed_out: set[int] = set()
+# Every process passed to `tracked`, until stop() has ended it: what stop_all() ends when
+# this program is told to stop.
+_live_lock = threading.Lock()
+_live: set[subprocess.Popen] = set()
+
+
+def tracked(process: subprocess.Popen) -> subprocess.Popen:
+    """`process`, remembered until stop() ends it."""
+    with _live_lock:
+        _live.add(process)
+    return process
+
+
+def stop_all() -> None:
+    """Stops every process `tracked` remembers (for a SIGTERM handler: the program's runs
+    must not outlive it, as they would when it is killed)."""
+    with _live_lock:
+        processes = list(_live)
+    stop(*processes)
 
 
 def free_port() -> int:
@@ -117,6 +136,8 @@ def stop(*processes: subprocess.Popen | None, timeout: float = 10.0) -> None:
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
+    with _live_lock:
+        _live.difference_update(p for p in processes if p is not None)
 
 
 @contextmanager

@@ -19,15 +19,30 @@ from __future__ import annotations
 
 import argparse
 import fnmatch
+import os
+import signal
 import sys
 from pathlib import Path
 
 from harness.contact_sheet import DEFAULT_FRAMES
+from harness.processes import stop_all
 from harness.report import headline_text, write_summary
 from harness.runs import run_all
 from harness.scenario import ScenarioError
 from harness.scenario_file import load_scenarios
 from harness.world import WorldError
+
+
+def stop_runs_on_sigterm() -> None:
+    """SIGTERM (a `timeout`, a CI job cancelled, `kill`) stops every run's ROS graph before the
+    program ends, as Ctrl-C does through the terminal's process group: killed alone, it would
+    leave each run's roscore, simulator and behaviour running."""
+
+    def handler(signum: int, _frame: object) -> None:
+        stop_all()
+        os._exit(128 + signum)  # the worker threads' runs are over: nothing to wait for
+
+    signal.signal(signal.SIGTERM, handler)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -96,6 +111,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"run_scenario: scheduler {args.scheduler}: {error}", file=sys.stderr)
             return 2
     else:
+        stop_runs_on_sigterm()
         results = run_all(
             scenarios, args.out, args.video, args.jobs, args.contact_sheet, args.markers
         )

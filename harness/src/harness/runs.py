@@ -28,7 +28,7 @@ from harness.evaluation import check, metrics
 from harness.marker_map import load_frames, plot_markers
 from harness.node_cli import BEHAVIOUR_GONE
 from harness.plot import plot_run
-from harness.processes import start_master, stop, use_sim_time, wait_for_node
+from harness.processes import start_master, stop, tracked, use_sim_time, wait_for_node
 from harness.report import format_value, headline, headline_text
 from harness.scenario import Scenario, ScenarioError, find_object
 from harness.scenario_parse import scenario_world
@@ -139,7 +139,9 @@ def run_one(
         def start(command: list[str]) -> subprocess.Popen:
             log.write(f"$ {' '.join(command)}\n")
             log.flush()
-            process = subprocess.Popen(command, env=env, stdout=log, stderr=subprocess.STDOUT)
+            process = tracked(
+                subprocess.Popen(command, env=env, stdout=log, stderr=subprocess.STDOUT)
+            )
             processes.append(process)
             return process
 
