@@ -116,6 +116,7 @@ RectifiedBlob rectifyBlob(const ColourBlob& blob, const CameraGeometry& camera,
   // Clamping a contour of points a pixel apart to the frame cuts it at the frame's edges to
   // within a fraction of a pixel.
   std::vector<cv::Point2f> inside_frame;
+  inside_frame.reserve(contour.size());
   for (const cv::Point2f& point : contour) {
     inside_frame.emplace_back(std::clamp(point.x, 0.0f, frame_size.width - 1.0f),
                               std::clamp(point.y, 0.0f, frame_size.height - 1.0f));
