@@ -1,6 +1,6 @@
-#include <utility>
-
 #include "follow_bot_common/ros/rviz_markers.h"
+
+#include <utility>
 
 namespace follow_bot {
 
