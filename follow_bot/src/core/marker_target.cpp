@@ -21,17 +21,11 @@ void rectifyMap(const CameraGeometry& camera, const cv::Rect& region, cv::Mat& m
                               region_camera, region.size(), CV_16SC2, map, map_fraction);
 }
 
-bool sameLensAndIntrinsics(const CameraGeometry& a, const CameraGeometry& b) {
-  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.lens && b.lens &&
-         a.lens->camera_matrix == b.lens->camera_matrix &&
-         a.lens->distortion == b.lens->distortion && a.lens->rectification == b.lens->rectification;
-}
-
 }  // namespace
 
 cv::Mat RectifiedPatches::patch(const cv::Mat& raw, const CameraGeometry& camera,
                                 const cv::Rect& patch) {
-  if (!camera_ || !sameLensAndIntrinsics(*camera_, camera) || frame_size_ != raw.size()) {
+  if (!camera_ || !sameIntrinsics(*camera_, camera) || frame_size_ != raw.size()) {
     // The frame and half of it again each way: the patches of markers partly out of view too.
     region_ = cv::Rect(-raw.cols / 2, -raw.rows / 2, 2 * raw.cols, 2 * raw.rows);
     rectifyMap(camera, region_, map_, map_fraction_);

@@ -41,6 +41,10 @@ struct CameraGeometry {
 // Empty when the geometry is usable, otherwise a message naming the first bad field.
 std::string validate(const CameraGeometry& camera);
 
+// Whether `a` and `b` have the same intrinsics (the rectified camera and the lens, if any); the
+// mounting is not compared.
+bool sameIntrinsics(const CameraGeometry& a, const CameraGeometry& b);
+
 // `camera` with the intrinsics it has for images of `calibrated` size (CameraInfo width, height)
 // made those of frames of `frame` size: the rectified camera's fx, fy, cx, cy and the lens's K
 // scaled by frame / calibrated, as image_geometry does for binning (REP 104), for a binning

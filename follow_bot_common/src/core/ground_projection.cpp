@@ -68,6 +68,14 @@ std::string validate(const CameraGeometry& camera) {
   return camera.lens ? validateLens(*camera.lens) : "";
 }
 
+bool sameIntrinsics(const CameraGeometry& a, const CameraGeometry& b) {
+  const bool same_lens = a.lens && b.lens ? a.lens->camera_matrix == b.lens->camera_matrix &&
+                                                a.lens->distortion == b.lens->distortion &&
+                                                a.lens->rectification == b.lens->rectification
+                                          : !a.lens && !b.lens;
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && same_lens;
+}
+
 std::optional<CameraGeometry> intrinsicsForFrame(const CameraGeometry& camera,
                                                  const cv::Size& calibrated,
                                                  const cv::Size& frame) {

@@ -22,12 +22,6 @@ size_t distortionSize(const std::string& model) {
   return 0;
 }
 
-bool sameLens(const std::optional<CameraLens>& a, const std::optional<CameraLens>& b) {
-  if (!a || !b) return !a && !b;
-  return a->camera_matrix == b->camera_matrix && a->distortion == b->distortion &&
-         a->rectification == b->rectification;
-}
-
 std::string sizeText(const cv::Size& size) {
   return std::to_string(size.width) + "x" + std::to_string(size.height);
 }
@@ -75,10 +69,6 @@ std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, bool image_rec
   if (!error.empty()) return error;
   camera = updated;
   return "";
-}
-
-bool sameIntrinsics(const CameraGeometry& a, const CameraGeometry& b) {
-  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && sameLens(a.lens, b.lens);
 }
 
 IntrinsicsSource::IntrinsicsSource(bool image_rectified, std::string topic)

@@ -26,9 +26,6 @@ namespace follow_bot {
 std::string updateIntrinsics(const sensor_msgs::CameraInfo& info, bool image_rectified,
                              CameraGeometry& camera);
 
-// Whether `a` and `b` have the same intrinsics (the rectified camera and the lens).
-bool sameIntrinsics(const CameraGeometry& a, const CameraGeometry& b);
-
 class IntrinsicsSource {
  public:
   // What a camera_info or a frame did to the camera's intrinsics.
