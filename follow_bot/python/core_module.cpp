@@ -368,10 +368,13 @@ void bindBeaconController(py::module_& m) {
   shape.value("sphere", BeaconShape::kSphere).value("box", BeaconShape::kBox);
   defStringInit(shape, &parseBeaconShape);
 
-  py::class_<BeaconObject> object(m, "BeaconObject",
-                                  "size_m: a sphere's radius, a box's width facing the camera.");
+  py::class_<BeaconObject> object(
+      m, "BeaconObject",
+      "size_m: a sphere's radius, a box's width facing the camera; depth_m: a box's footprint "
+      "behind that face.");
   defEnumField(object, "shape", &BeaconObject::shape, &parseBeaconShape);
-  object.def_readwrite("size_m", &BeaconObject::size_m);
+  object.def_readwrite("size_m", &BeaconObject::size_m)
+      .def_readwrite("depth_m", &BeaconObject::depth_m);
   defKeywordInit(object, static_cast<Validator<BeaconObject>>(&validate));
 
   py::class_<RangeEstimate> range(m, "RangeEstimate", "Ranges in m; None when not observable.");

@@ -37,6 +37,9 @@ struct BeaconObject {
   // Sphere: its radius. Box: the width of the face toward the camera. Default: the dumpster
   // world's 1.8 m wide box.
   double size_m = 1.8;
+  // Box only: how far its footprint reaches behind that face (the dumpster's 1.0 m), to aim at
+  // its centre (boxCentre).
+  double depth_m = 1.0;
 };
 
 // Empty when the object is usable, otherwise a message naming the first bad field.
@@ -111,6 +114,37 @@ RectifiedBlob rectifyBlob(const ColourBlob& blob, const CameraGeometry& camera,
 // frame's edge (the circle would not be the whole ball's) or nothing fits.
 std::optional<cv::Point3d> sphereCentre(const ColourBlob& blob, int image_width, int image_height,
                                         const CameraGeometry& camera, double radius_m);
+
+// A box's near face on the floor, in base_link: where the silhouette meets the floor, the
+// lowest pixel of each column (pixel centres through the lens and pixelToGround) fitted by a
+// line. Contacts twice as far as the nearest, then those off the first fit by more than 5 % of
+// their range (5 cm at least), are not the face (another object of the colour touching the
+// silhouette and standing elsewhere, the leaning side edges of a pitched camera's view) and are
+// left out of the second fit. Empty unless the blob is found, its bottom edge is in the frame
+// and 10 or more contacts fit.
+struct BoxFace {
+  cv::Point2d foot;                 // the face's point nearest the robot (the perpendicular's foot)
+  cv::Point2d along;                // unit, along the face from the frame's left to its right
+  cv::Point2d eye;                  // the camera's optical centre seen from above
+  cv::Point2d leftmost, rightmost;  // the contacts on the face furthest along it either way
+  cv::Point2d behind() const { return cv::Point2d(-along.y, along.x); }  // unit, away from us
+};
+std::optional<BoxFace> boxFace(const ColourBlob& blob, int image_width, int image_height,
+                               const CameraGeometry& camera);
+
+// The centre (base_link x, y) of a box target from its face and the frame's cuts. Each face end
+// in view is where the ray through the last contact on that side meets the face (seen from
+// above, that ray passes through the box's corner whether its pixel is on the bottom edge or up
+// the side edge; the contact itself a row's error slides along the ray). With both ends in
+// view the face's middle is between them, if they are object.size_m apart within 15 % (else
+// this is another face, seen from beside the box); with one, object.size_m / 2 along the face
+// from it. The centre is object.depth_m / 2 behind that middle. Empty for a sphere, with both
+// sides cut, or for a face of another length. Unlike the silhouette's middle, neither the
+// frame's edge (near the stop the face is wider than the view: centring the visible part leaves
+// the robot at rest with the box's edge on the frame's, a few degrees off) nor another object
+// of the colour touching the silhouette (a green poster on the wall behind it) moves it.
+std::optional<cv::Point2d> boxCentre(const BoxFace& face, bool cut_left, bool cut_right,
+                                     const BeaconObject& object);
 
 // Both range estimates for a found blob of `object` in a frame of the given size (an estimate
 // whose condition above fails is left empty; a blob that is not found gives neither).
@@ -245,14 +279,17 @@ class BeaconController {
   // Approach mode: with the target in view, bearing from its column and range from
   // estimateRange().best(). A sphere's column is its centroid; a box's is the middle of its
   // silhouette, because seen obliquely its nearer face outweighs the rest and pulls the
-  // centroid off the box's centre (~3 deg at the stop point from 30 deg off its axis). Arrived
-  // (zero, kArrived) when both are within tolerance, and kept while both stay within the release
-  // bounds; otherwise kApproaching with the linear and
-  // angular laws of the config. Without a range (too close to see its bottom edge, or partly out of
-  // frame) it only turns. A box spilling over both sides of the frame has no observable centre, so
-  // its bearing counts as zero. When the target vanishes after being seen the robot stands still
-  // (kLost) for lost_hold s, then searches; a controller that has never seen it searches at once
-  // (to the left).
+  // centroid off the box's centre (~3 deg at the stop point from 30 deg off its axis). But a
+  // box whose face boxFace finds and boxCentre places is aimed at by that centre's bearing from
+  // base_link. Arrived (zero, kArrived) when both are within tolerance, and kept while both
+  // stay within the release bounds; otherwise kApproaching with the linear and angular laws of
+  // the config. Without a range (too close to see its bottom edge, or partly out of frame) it
+  // only turns. A box spilling over both sides of the frame has no observable centre: its
+  // bearing is the last one seen less the turns commanded since (a late base makes them all in
+  // the end; turning on, rather than holding the heading, ends the turn a late base was still
+  // making as the face filled the view), or zero if none was seen. When the target vanishes after
+  // being seen the robot stands still (kLost) for lost_hold s, then searches; a controller that has
+  // never seen it searches at once (to the left).
   Twist2D update(const BlobResult& blobs, double stamp);
 
   BeaconState state() const { return state_; }
@@ -280,6 +317,10 @@ class BeaconController {
   double search_direction_ = 1.0;  // +1 left, -1 right: toward where the target was last seen
   std::optional<double> last_range_;
   std::optional<double> last_bearing_;
+  // Approach mode: the bearing of the last frame that showed one, less the turns commanded since.
+  std::optional<double> carried_bearing_;
+  Twist2D last_command_;
+  double last_command_stamp_ = 0.0;
 };
 
 }  // namespace follow_bot

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -50,7 +51,11 @@ const char* toString(BeaconShape shape) {
 }
 
 std::string validate(const BeaconObject& object) {
-  return requirePositive("size_m", object.size_m);
+  for (const std::string& error :
+       {requirePositive("size_m", object.size_m), requirePositive("depth_m", object.depth_m)}) {
+    if (!error.empty()) return error;
+  }
+  return "";
 }
 
 std::optional<double> rangeFromWidth(double focal_px, double width_m, double width_px) {
@@ -181,6 +186,110 @@ RangeEstimate estimateRange(const ColourBlob& blob, int image_width, int image_h
     }
   }
   return estimate;
+}
+
+std::optional<BoxFace> boxFace(const ColourBlob& blob, int image_width, int image_height,
+                               const CameraGeometry& camera) {
+  const cv::Rect& box = blob.bounding_box;
+  if (!blob.found || box.y + box.height >= image_height || box.width <= 0 ||
+      box.x + box.width > image_width) {
+    return std::nullopt;
+  }
+  // The lowest outline pixel of each column, where the silhouette meets the floor.
+  std::vector<int> lowest_row(box.width, -1);
+  for (const cv::Point& pixel : blob.contour) {
+    if (pixel.x < box.x || pixel.x >= box.x + box.width) continue;  // not the blob's own
+    int& row = lowest_row[pixel.x - box.x];
+    row = std::max(row, pixel.y);
+  }
+  std::vector<cv::Point2d> lowest;
+  for (int i = 0; i < box.width; ++i) {
+    if (lowest_row[i] >= 0) lowest.emplace_back(box.x + i, lowest_row[i]);
+  }
+  std::vector<cv::Point2f> floor;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const cv::Point2d& pixel : rectifyPixels(camera, lowest)) {
+    if (const std::optional<cv::Point2d> point = pixelToGround(camera, pixel.x, pixel.y)) {
+      floor.emplace_back(*point);
+      nearest = std::min(nearest, std::hypot(point->x, point->y));
+    }
+  }
+  // Contacts twice as far as the nearest are not the face's: things behind it, or the lowest
+  // pixels of columns only a leaning side edge crosses (a pitched camera's verticals lean).
+  // Left in, they would sway the first fit.
+  floor.erase(std::remove_if(
+                  floor.begin(), floor.end(),
+                  [nearest](const cv::Point2f& p) { return std::hypot(p.x, p.y) > 2.0 * nearest; }),
+              floor.end());
+  constexpr std::size_t kMinContacts = 10;
+  cv::Vec4f face;
+  const auto on_face = [&face](const std::vector<cv::Point2f>& points) {
+    std::vector<cv::Point2f> kept;
+    for (const cv::Point2f& p : points) {
+      const double off = std::abs((p.x - face[2]) * face[1] - (p.y - face[3]) * face[0]);
+      if (off <= std::max(0.05, 0.05 * std::hypot(p.x, p.y))) kept.push_back(p);
+    }
+    return kept;
+  };
+  if (floor.size() < kMinContacts) return std::nullopt;
+  cv::fitLine(floor, face, cv::DIST_HUBER, 0.0, 0.01, 0.01);
+  std::vector<cv::Point2f> contacts = on_face(floor);
+  if (contacts.size() < kMinContacts) return std::nullopt;
+  cv::fitLine(contacts, face, cv::DIST_HUBER, 0.0, 0.01, 0.01);
+  contacts = on_face(contacts);
+  if (contacts.size() < kMinContacts) return std::nullopt;
+  BoxFace found;
+  found.along = cv::Point2d(face[0], face[1]);
+  if (found.along.y > 0.0) found.along = -found.along;  // base_link y falls to the right
+  const cv::Point2d origin(face[2], face[3]);
+  found.foot = origin - origin.dot(found.along) * found.along;
+  found.eye = cv::Point2d(camera.x_offset_m, 0.0);
+  const auto [leftmost, rightmost] = std::minmax_element(
+      contacts.begin(), contacts.end(), [&found](const cv::Point2f& a, const cv::Point2f& b) {
+        return cv::Point2d(a).dot(found.along) < cv::Point2d(b).dot(found.along);
+      });
+  found.leftmost = *leftmost;
+  found.rightmost = *rightmost;
+  if (!isFinite(found.foot) || found.foot.dot(found.foot) == 0.0) return std::nullopt;
+  return found;
+}
+
+namespace {
+
+// Where the ray through `contact` meets the face, seen from above.
+std::optional<cv::Point2d> faceEnd(const BoxFace& face, const cv::Point2d& contact) {
+  const cv::Point2d ray = contact - face.eye;
+  const double crossing = ray.cross(face.along);
+  if (std::abs(crossing) < 1e-9) return std::nullopt;
+  return face.eye + ((face.foot - face.eye).cross(face.along) / crossing) * ray;
+}
+
+}  // namespace
+
+std::optional<cv::Point2d> boxCentre(const BoxFace& face, bool cut_left, bool cut_right,
+                                     const BeaconObject& object) {
+  if (object.shape != BeaconShape::kBox || (cut_left && cut_right)) return std::nullopt;
+  std::optional<cv::Point2d> middle;  // of the face
+  if (!cut_left && !cut_right) {
+    const std::optional<cv::Point2d> left = faceEnd(face, face.leftmost);
+    const std::optional<cv::Point2d> right = faceEnd(face, face.rightmost);
+    if (!left || !right) return std::nullopt;
+    const cv::Point2d span = *right - *left;
+    if (std::abs(std::hypot(span.x, span.y) - object.size_m) > 0.15 * object.size_m) {
+      return std::nullopt;
+    }
+    middle = 0.5 * (*left + *right);
+  } else if (!cut_left) {
+    middle = faceEnd(face, face.leftmost);
+    if (middle) *middle += 0.5 * object.size_m * face.along;
+  } else {
+    middle = faceEnd(face, face.rightmost);
+    if (middle) *middle -= 0.5 * object.size_m * face.along;
+  }
+  if (!middle) return std::nullopt;
+  const cv::Point2d centre = *middle + 0.5 * object.depth_m * face.behind();
+  if (!isFinite(centre)) return std::nullopt;
+  return centre;
 }
 
 std::optional<BeaconMode> parseBeaconMode(const std::string& name) {
@@ -333,6 +442,7 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
   if (target == nullptr) {
     last_range_.reset();
     last_bearing_.reset();
+    carried_bearing_.reset();
     if (target_seen_ && stamp - target_last_seen_ <= config_.lost_hold) {
       state_ = BeaconState::kLost;
       return Twist2D();
@@ -351,7 +461,23 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
                         box.y + 0.5 * (box.height - 1))
           : target->centroid;
   const double column = rectifyPixel(camera, aim).x;  // a raw frame's through the lens
-  const double bearing = spans_frame ? 0.0 : std::atan((column - camera.cx) / camera.fx);
+  const std::optional<BoxFace> face =
+      config_.target.shape == BeaconShape::kBox
+          ? boxFace(*target, blobs.image_width, blobs.image_height, camera)
+          : std::nullopt;
+  const std::optional<cv::Point2d> centre =
+      face ? boxCentre(*face, box.x <= 0, box.x + box.width >= blobs.image_width, config_.target)
+           : std::nullopt;
+  // Positive to the right, as the column's. Not seen, the last bearing seen less the turns
+  // commanded since: a late base makes them all in the end.
+  if (centre) {
+    carried_bearing_ = -std::atan2(centre->y, centre->x);
+  } else if (!spans_frame) {
+    carried_bearing_ = std::atan((column - camera.cx) / camera.fx);
+  } else if (carried_bearing_) {
+    *carried_bearing_ += last_command_.angular * (stamp - last_command_stamp_);
+  }
+  const double bearing = carried_bearing_.value_or(0.0);
   if (bearing != 0.0) search_direction_ = bearing > 0.0 ? -1.0 : 1.0;
   const std::optional<double> range =
       estimateRange(*target, blobs.image_width, blobs.image_height, camera, config_.target).best();
@@ -361,21 +487,23 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
   const bool arrived = state_ == BeaconState::kArrived;
   const double distance_bound = arrived ? config_.distance_release : config_.distance_tolerance;
   const double bearing_bound = arrived ? config_.bearing_release : config_.bearing_tolerance;
+  Twist2D command;
   if (range && std::abs(*range - config_.stop_distance) < distance_bound &&
       std::abs(bearing) < bearing_bound) {
     state_ = BeaconState::kArrived;
-    return Twist2D();
+  } else {
+    state_ = BeaconState::kApproaching;
+    if (range) {
+      const double min_speed = config_.allow_reverse ? -config_.max_linear : 0.0;
+      const double taper = std::max(0.0, 1.0 - std::abs(bearing) / config_.speed_taper_bearing);
+      command.linear = taper * std::clamp(config_.k_range * (*range - config_.stop_distance),
+                                          min_speed, config_.max_linear);
+    }
+    command.angular =
+        std::clamp(-config_.k_bearing * bearing, -config_.max_angular, config_.max_angular);
   }
-  state_ = BeaconState::kApproaching;
-  Twist2D command;
-  if (range) {
-    const double min_speed = config_.allow_reverse ? -config_.max_linear : 0.0;
-    const double taper = std::max(0.0, 1.0 - std::abs(bearing) / config_.speed_taper_bearing);
-    command.linear = taper * std::clamp(config_.k_range * (*range - config_.stop_distance),
-                                        min_speed, config_.max_linear);
-  }
-  command.angular =
-      std::clamp(-config_.k_bearing * bearing, -config_.max_angular, config_.max_angular);
+  last_command_ = command;
+  last_command_stamp_ = stamp;
   return command;
 }
 

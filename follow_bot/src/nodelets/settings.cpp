@@ -116,6 +116,7 @@ BeaconControllerConfig beaconStartupConfig(const ros::NodeHandle& pnh) {
       parseChoice("target_shape", param<std::string>(pnh, "target_shape", "box"), parseBeaconShape,
                   "'box' or 'sphere'");
   controller.target.size_m = positiveParam(pnh, "target_size", controller.target.size_m);
+  controller.target.depth_m = positiveParam(pnh, "target_depth", controller.target.depth_m);
   return controller;
 }
 

@@ -38,7 +38,7 @@ struct BeaconChaserSettings {
 // On top of `startup` for what only start-up sets (target object, camera).
 BeaconChaserSettings beaconChaserSettings(const BeaconChaserConfig& cfg,
                                           const BeaconControllerConfig& startup);
-// What only start-up sets: the target object (~target_shape, ~target_size).
+// What only start-up sets: the target object (~target_shape, ~target_size, ~target_depth).
 BeaconControllerConfig beaconStartupConfig(const ros::NodeHandle& pnh);
 
 // The marker detector ~target names.
