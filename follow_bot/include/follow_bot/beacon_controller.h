@@ -228,8 +228,10 @@ struct BeaconControllerConfig {
   // The linear speed is scaled by max(0, 1 - |bearing| / speed_taper_bearing), so a robot
   // facing away turns toward the object before driving and arrives along a straight line: a
   // sideways drift would show later as a bearing error, once a box too close to fit in the
-  // frame no longer shows its centre.
-  double speed_taper_bearing = 0.2;  // rad
+  // frame no longer shows its centre. 3 deg rather than 11: a base 150 ms late with a 0.2 s
+  // motor lag otherwise reaches that point from 2 m still turning (0.5 deg off at the stop in
+  // the closed-loop gtest, 0.07 deg with 3).
+  double speed_taper_bearing = 0.05;  // rad
   double k_bearing =
       BeaconChaserDefaults::k_bearing;  // angular = -k_bearing * bearing, rad/s per rad
   double max_angular = BeaconChaserDefaults::max_angular;  // rad/s, bound on that angular
@@ -284,12 +286,14 @@ class BeaconController {
   // base_link. Arrived (zero, kArrived) when both are within tolerance, and kept while both
   // stay within the release bounds; otherwise kApproaching with the linear and angular laws of
   // the config. Without a range (too close to see its bottom edge, or partly out of frame) it
-  // only turns. A box spilling over both sides of the frame has no observable centre: its
-  // bearing is the last one seen less the turns commanded since (a late base makes them all in
-  // the end; turning on, rather than holding the heading, ends the turn a late base was still
-  // making as the face filled the view), or zero if none was seen. When the target vanishes after
-  // being seen the robot stands still (kLost) for lost_hold s, then searches; a controller that has
-  // never seen it searches at once (to the left).
+  // only turns. The point aimed at is carried from frame to frame by the commands sent (a late
+  // base makes them all in the end): a box spilling over both sides of the frame has no
+  // observable centre and the carried point stands (the turn a late base was still making as
+  // the face filled the view is finished, not left), or the bearing is zero if none was seen;
+  // a centre placed from one end in view moves it 0.15 of the way. Turns under 1e-4 rad are
+  // not commanded. When the target vanishes after being seen the robot stands still (kLost) for
+  // lost_hold s, then searches; a controller that has never seen it searches at once (to the
+  // left).
   Twist2D update(const BlobResult& blobs, double stamp);
 
   BeaconState state() const { return state_; }
@@ -317,8 +321,8 @@ class BeaconController {
   double search_direction_ = 1.0;  // +1 left, -1 right: toward where the target was last seen
   std::optional<double> last_range_;
   std::optional<double> last_bearing_;
-  // Approach mode: the bearing of the last frame that showed one, less the turns commanded since.
-  std::optional<double> carried_bearing_;
+  // Approach mode: the point aimed at (base_link), as last seen or carried since.
+  std::optional<cv::Point2d> aimed_at_;
   Twist2D last_command_;
   double last_command_stamp_ = 0.0;
 };
