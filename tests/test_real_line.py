@@ -238,8 +238,11 @@ def count_in_shadow(
 
 def test_the_line_in_a_shadow_on_the_real_frames(realdata, record_property):
     """Every labelled frame as if a bluish hard shadow covered it: at 55 % of the light nearly
-    every line is still found, at 30 % (real paint's yellowness there is ~45, at the floor test's
-    margin) about half; a line where there is none, never. The lecture finds none at 30 %."""
+    every line is still found, at 30 % most. There real paint's yellowness is ~45, at the floor
+    test's full margin (40), which found 15 of 24; the margin now dims with the band's brightest
+    pixels. The misses are paint the shadow takes out of the colour box (S < 100, or V < 40 on
+    the dark warm cast of pic2). A line where there is none, never. The lecture finds none at
+    30 %."""
     found = {}
     for brightness in (0.55, 0.3):
         hits, clean = count_in_shadow(realdata, core.LineDetectorConfig, brightness)
@@ -250,14 +253,14 @@ def test_the_line_in_a_shadow_on_the_real_frames(realdata, record_property):
         if brightness == 0.3:
             assert lecture_hits == 0
     assert found[0.55] >= 22, found
-    assert found[0.3] >= 12, found
+    assert found[0.3] >= 21, found
 
 
 def test_the_line_in_a_bluer_shadow_needs_the_wider_hue_window(realdata, record_property):
     """The frames under a bluer shadow (BGR gains 1.3, 1.0, 0.85: lit by clear sky alone), whose
     tint moves real paint's hue towards green: the default hue window (h_max 40) still finds
-    nearly as many lines as under the mild tint, the former 34 about half as many at 55 % and a
-    third at 30 %; a line where there is none, never."""
+    nearly as many lines as under the mild tint, the former 34 about half to 60 % as many; a
+    line where there is none, never."""
     narrow = with_changes(upper=core.HsvColor(h=34, s=255, v=255))
     found = {}
     for brightness in (0.55, 0.3):
@@ -270,9 +273,10 @@ def test_the_line_in_a_bluer_shadow_needs_the_wider_hue_window(realdata, record_
             f"{found['default', brightness]}/{LINES} lines, "
             f"h_max 34: {found['h_max 34', brightness]}",
         )
-    # Measured: 20 and 12 of 24 with the default; 12 and 6 with h_max 34.
-    assert found["default", 0.55] >= 19 and found["default", 0.3] >= 9, found
-    assert found["h_max 34", 0.55] <= 14 and found["h_max 34", 0.3] <= 6, found
+    # Measured: 20 and 16 of 24 with the default; 12 and 8 with h_max 34 (before the floor
+    # test's margin dimmed with the band: 20 and 12; 12 and 6).
+    assert found["default", 0.55] >= 20 and found["default", 0.3] >= 16, found
+    assert found["h_max 34", 0.55] <= 13 and found["h_max 34", 0.3] <= 9, found
 
 
 def test_the_line_in_a_shadow_over_it_alone_on_the_real_frames(realdata, record_property):

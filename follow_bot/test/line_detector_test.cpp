@@ -768,6 +768,30 @@ TEST(LineDetector, FindsTheLineInAHardShadow) {
   }
 }
 
+// The whole frame at 22 % of the light: the paint's yellowness (~38) is below the floor test's
+// full margin over the floor (0 + 40), but every yellowness in the band is dimmer, and the margin
+// dims with the band's brightest pixels (~47 of 120: a quarter of it, 10). The grey floor and a
+// warm cast floor in the same light (yellowness ~15, at the colour box's S floor) are no line.
+TEST(LineDetector, FindsTheLineWhenTheWholeBandIsDimmerThanTheMargin) {
+  const int line_x = 250, width = 50;
+  cv::Mat frame = paintedFloor(line_x, width);
+  relight(frame, cv::Rect(0, 0, 640, 480), 0.22, kSkyShadowTint);
+  addSensorNoise(frame, 4);
+  const BandMeasurement band = LineDetector().detect(frame).band;
+  EXPECT_TRUE(band.found);
+  EXPECT_NEAR(band.centroid_x, line_x + (width - 1) / 2.0, 1.0);
+  EXPECT_GE(band.pixel_count, 20 * width / 2);
+  EXPECT_LT(band.min_yellowness, 25);
+  for (const cv::Scalar& floor_colour : {kGrey, cv::Scalar(80, 138, 150)}) {
+    for (double brightness : {0.22, 0.3}) {
+      cv::Mat floor(480, 640, CV_8UC3, floor_colour);
+      relight(floor, cv::Rect(0, 0, 640, 480), brightness, kSkyShadowTint);
+      addSensorNoise(floor, 5);
+      EXPECT_FALSE(LineDetector().detect(floor).band.found) << floor_colour << " " << brightness;
+    }
+  }
+}
+
 // A shadow over the line and little else, on a lit warm floor near the paint's hue (wood: HSV
 // (13, 153, 150), yellowness 40): the band's floor is mostly lit, so its median yellowness is
 // the lit wood's and the paint in the shadow (34 % of the light, tinted as by a clear sky:

@@ -44,8 +44,11 @@ struct LineDetectorConfig {
   // floor_margin levels, or by floor_mads median absolute deviations where that is more; the
   // floor's median and MAD are sampled from the band itself every frame (every 4th pixel of
   // every 4th row), so a cast, glare or shadow that moves the whole floor moves the threshold
-  // with it, while paint, even in a shadow at 30 % of the light, stays far yellower than the
-  // floor around it. A shadow over part of the band dims the paint in it and the floor alike:
+  // with it, while paint stays far yellower than the floor around it. floor_margin holds where
+  // the band's brightest samples (its 99th percentile of max(B, G, R)) reach 120; in a dimmer
+  // band every yellowness is dimmer, and the margin dims in proportion, down to a quarter of
+  // it: paint in a whole-frame shadow at 30 % of the light is still found. Not where a block is
+  // lit beside a shadow: there the band is not dim, it is partly shaded. A shadow over part of the band dims the paint in it and the floor alike:
   // each 128-column block's threshold is scaled by its light (its floor's lower-quartile
   // brightness, max(B, G, R), over the band's), down to half, never up. Where a block is lit
   // (1.5 times the band's light) while most of the band is in shadow, the lit floor beside the

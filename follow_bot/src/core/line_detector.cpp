@@ -88,6 +88,17 @@ constexpr int kShadeQuantilePercent = 25;
 constexpr int kDeepestShadeDivisor = 2;
 // A block this much brighter than the band is lit where the band is in shadow.
 constexpr struct { int num, den; } kLitBlockFactor{3, 2};
+// The band's brightness is its brightest samples' (this percentile of max(B, G, R)): white
+// paint, lit floor or the line itself. At kFullBrightness and above (the dimmest of the 38
+// labelled real bands as shot reads 123) the margin is floor_margin; below, the band is
+// underexposed or in a shadow, every yellowness in it is dimmer, and the margin dims in
+// proportion, down to a quarter of it (kDimmestMarginDivisor): paint in a whole-frame shadow at
+// 30 % of the light reads ~45 levels yellower than its floor, at the full margin, while the
+// floor's noise does not dim. A band with a lit block (kLitBlockFactor) keeps the full margin: a
+// bright object in a shadow beside lit floor would otherwise dim the lit floor's margin too.
+constexpr int kBrightnessPercentile = 99;
+constexpr int kFullBrightness = 120;
+constexpr int kDimmestMarginDivisor = 4;
 // 255 * 65536 / brightness: a pixel's chroma (<= brightness) over its brightness in 255ths, its
 // HSV saturation, is (chroma * kReciprocals[brightness]) >> 16, without a division.
 const std::array<int, 256> kReciprocals = [] {
@@ -505,6 +516,7 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
   // light (the median over the darkest quarter); the band's light is the median block's, so
   // that a shadow over fewer than half the blocks leaves it that of the lit floor.
   std::vector<int> block_light(blocks), block_floor(blocks);
+  std::array<int, 256> light_counts{};  // the band's, for its brightness
   for (int block = 0; block < blocks; ++block) {
     const size_t first = static_cast<size_t>(block) * block_capacity;
     const uchar* lights = sample_lights.get() + first;
@@ -513,6 +525,7 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
     // Counting, not sorting: a few hundred samples into 256 levels.
     std::array<int, 256> counts{};
     for (int i = 0; i < size; ++i) ++counts[lights[i]];
+    for (int level = 0; level < 256; ++level) light_counts[level] += counts[level];
     int light = 0;
     for (int below = counts[0]; below <= size * kShadeQuantilePercent / 100;) {
       below += counts[++light];
@@ -557,8 +570,21 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
     within += (median - mad >= 0 ? histogram[median - mad] : 0) +
               (median + mad <= 255 ? histogram[median + mad] : 0);
   }
-  const int margin =
-      std::max(config_.floor_margin, static_cast<int>(std::ceil(config_.floor_mads * mad)));
+  // The band's brightness (kBrightnessPercentile).
+  int brightness = 0;
+  for (int below = light_counts[0]; below < samples * kBrightnessPercentile / 100;) {
+    below += light_counts[++brightness];
+  }
+  const int dimmed_margin = std::max(
+      (config_.floor_margin * std::min(brightness, kFullBrightness) + kFullBrightness - 1) /
+          kFullBrightness,
+      config_.floor_margin / kDimmestMarginDivisor);
+  // A block lit beside a shadow: the band is not dim, part of it is shaded.
+  const bool any_lit = std::any_of(block_light.begin(), block_light.end(), [&](int light) {
+    return kLitBlockFactor.den * light >= kLitBlockFactor.num * band_light;
+  });
+  const int margin = std::max(any_lit ? config_.floor_margin : dimmed_margin,
+                              static_cast<int>(std::ceil(config_.floor_mads * mad)));
   test.min_yellowness = median + margin;
   if (band_light == 0) {  // a black band: no light to scale by
     test.block_min_yellowness.assign(blocks, test.min_yellowness);
