@@ -36,7 +36,22 @@ FAMILY_SIZES = {
 }  # fmt: skip
 
 
+# The Monte Carlo sweeps (worlds/sweeps, each member a room, camera and base drawn from its seed)
+# and how many members each holds. `make test-full` plays a slice of each, its first
+# SWEEP_SLICE members (a member depends only on the sweep's seed and its index); a whole sweep
+# takes hours (docs/results.md). `make test` plays none: at about a minute a member they do not
+# fit its 12 minutes; its harsh laps (follower_harsh) and realistic runs stand for them there.
+SWEEP_SIZES = {
+    "follower_harsh_sweep": 120, "beacons_red_stop_harsh_sweep": 100,
+    "beacons_follow_green_harsh_sweep": 100, "dumpster_harsh_sweep": 100,
+    "parker_sign_harsh_sweep": 100, "parker_tag_sweep": 200,
+}  # fmt: skip
+SWEEP_SLICE = 10
+
+
 def family_file(family: str) -> Path:
+    if family in SWEEP_SIZES:
+        return WORLDS / "sweeps" / f"{family}.yaml"
     folder = "realistic" if family.endswith(("_realistic", "_harsh")) else "scenarios"
     return WORLDS / folder / f"{family}.yaml"
 
@@ -44,6 +59,7 @@ def family_file(family: str) -> Path:
 FAMILIES = {
     family: [s.name for s in load_scenarios(family_file(family))] for family in FAMILY_SIZES
 }
+SWEEPS = {sweep: [s.name for s in load_scenarios(family_file(sweep))] for sweep in SWEEP_SIZES}
 # `make test` plays these runs: every fault run (camera dropout, a hidden marker; each also ends
 # judged on its family's nominal criteria), one run of each family without a fault run, the
 # hardest mounting (0.5 m, level: nearest its bounds), the Burger preset (the slowest base, a
@@ -93,12 +109,18 @@ RUNS = [
     )
     for names in FAMILIES.values()
     for name in names
+] + [
+    pytest.param(name, marks=pytest.mark.full)
+    for names in SWEEPS.values()
+    for name in names[:SWEEP_SLICE]
 ]
 JOBS = int(os.environ.get("SCENARIO_JOBS", os.cpu_count() or 1))
 
 
 def test_every_family_has_its_runs():
     assert {family: len(names) for family, names in FAMILIES.items()} == FAMILY_SIZES
+    assert {sweep: len(names) for sweep, names in SWEEPS.items()} == SWEEP_SIZES
+    assert set(SWEEP_SIZES) == {path.stem for path in (WORLDS / "sweeps").glob("*.yaml")}
     quick_families = {name.split("/")[0] for name in QUICK}
     assert {name for names in FAMILIES.values() for name in names} >= QUICK | set(NOT_YET)
     assert quick_families == set(FAMILY_SIZES)
