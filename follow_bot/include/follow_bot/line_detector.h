@@ -48,12 +48,12 @@ struct LineDetectorConfig {
   // the band's brightest samples (its 99th percentile of max(B, G, R)) reach 120; in a dimmer
   // band every yellowness is dimmer, and the margin dims in proportion, down to a quarter of
   // it: paint in a whole-frame shadow at 30 % of the light is still found. Not where a block is
-  // lit beside a shadow: there the band is not dim, it is partly shaded. A shadow over part of the band dims the paint in it and the floor alike:
-  // each 128-column block's threshold is scaled by its light (its floor's lower-quartile
-  // brightness, max(B, G, R), over the band's), down to half, never up. Where a block is lit
-  // (1.5 times the band's light) while most of the band is in shadow, the lit floor beside the
-  // shadow's edge is kept out by that block's own threshold, scaled to each pixel's brightness.
-  // 0: no floor test, the colour box alone.
+  // lit beside a shadow: there the band is not dim, it is partly shaded. A shadow over part of the
+  // band dims the paint in it and the floor alike: each 128-column block's threshold is scaled by
+  // its light (its floor's lower-quartile brightness, max(B, G, R), over the band's), down to half,
+  // never up. Where a block is lit (1.5 times the band's light) while most of the band is in
+  // shadow, the lit floor beside the shadow's edge is kept out by that block's own threshold,
+  // scaled to each pixel's brightness. 0: no floor test, the colour box alone.
   int floor_margin = Defaults::floor_margin;
   double floor_mads = Defaults::floor_mads;
   // The width gate: a blob whose mean width across its direction on the floor (its extent in
