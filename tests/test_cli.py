@@ -127,7 +127,7 @@ def test_the_simulator_starts_without_warnings():
 def test_a_behaviour_dead_at_launch_ends_its_run_as_could_not_run(tmp_path):
     """A follower refusing its ~max_linear at start-up: the lockstep simulator's first frame gets
     no answer from a status topic nobody publishes, so the run ends there as an error (it used
-    to wait the reply timeout, 2 s, on each of the 6 000 frames of its 200 s)."""
+    to wait the reply timeout on each of the 6 000 frames of its 200 s)."""
     scenario = tmp_path / "dead.yaml"
     scenario.write_text(
         "name: dead_at_launch\nworld: course\nduration: 200.0\n"

@@ -40,8 +40,8 @@ def test_lockstep_gives_the_c_plus_plus_behaviours_the_reply_timeout_as_wall_wat
     by_name = {s.name: s for path in SCENARIOS.glob("*.yaml") for s in load_scenarios(path)}
     for name in ("follower/lap_default", "parker_tag/d2_off20_b60", "beacons_red_stop/plain"):
         scenario = by_name[name]
-        assert scenario.lockstep and scenario.reply_timeout == 2.0, name
-        assert "wall_watchdog_timeout:=2.0" in behaviour_command(scenario), name
+        assert scenario.lockstep and scenario.reply_timeout == 10.0, name
+        assert "wall_watchdog_timeout:=10.0" in behaviour_command(scenario), name
         realtime = replace(scenario, lockstep=False)
         assert not any("wall_watchdog" in a for a in behaviour_command(realtime)), name
     # The Python lab nodes have no wall-clock watchdog, and their launch no such arg.

@@ -34,6 +34,12 @@ STILL_STOP_S = 3.0
 # family's stated noise floor, if larger), beside the specification's bounds.
 MEASURED_FACTOR = 3.0
 
+# Wall seconds a lockstep simulator waits for the behaviour's answer to a frame before it counts
+# a miss (every lockstep run must have none). Generous: a run's result must not depend on the
+# machine's load, and 2 s was exceeded by a sign parker's search on 2 cores running a suite and
+# a sweep at once. Only a behaviour that does not answer costs the wait.
+REPLY_TIMEOUT_S = 10.0
+
 
 class ScenarioError(ValidationError):
     """A scenario file that cannot be run; the message names the offending field."""

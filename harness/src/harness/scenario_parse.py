@@ -14,6 +14,7 @@ from typing import Any
 from harness.realism import parse_realism
 from harness.robot_preset import GENERIC, frame_rate, preset, robot_world
 from harness.scenario import (
+    REPLY_TIMEOUT_S,
     STOP_CONDITIONS,
     Behaviour,
     CameraMounting,
@@ -266,7 +267,7 @@ def parse_scenario(data: Any, base_dir: Path | str = ".", source: Path | None = 
             duration=duration,
             stop_when=stop_when,
             lockstep=lockstep,
-            reply_timeout=f.get("reply_timeout", number(gt=0.0), 2.0),
+            reply_timeout=f.get("reply_timeout", number(gt=0.0), REPLY_TIMEOUT_S),
             perturbations=replace(
                 f.section("perturbations", _parse_perturbations), noise_seed=seed
             ),

@@ -22,7 +22,7 @@ Parameters: ~scenario (a scenario YAML; its world, start, rate, duration and per
 ~world (a world YAML or name), ~robot (a robot preset of follow_bot/config/robots.yaml whose
 camera and speed limits replace the world's; generic: the world's), ~rate_hz (30), ~duration (s, 0 =
 forever), ~lockstep (true),
-~reply_timeout (2.0 wall s), ~status (the behaviour's status topic, e.g. follower/status;
+~reply_timeout (10.0 wall s), ~status (the behaviour's status topic, e.g. follower/status;
 "" finds the one BehaviourStatus topic published in the simulator's namespace), ~record (path
 of an .npz trajectory log written at the end),
 ~video (path of an MP4 of the camera view, optional), ~video_debug (the behaviour's namespace,
@@ -52,7 +52,7 @@ from follow_bot_msgs.ros_image import bgr_to_jpeg_msg, bgr_to_msg, camera_info_m
 from harness.debug_video import DebugView
 from harness.node_cli import BEHAVIOUR_GONE, parse_node_command_line
 from harness.robot_preset import GENERIC, camera_topics, robot_world
-from harness.scenario import ScenarioError
+from harness.scenario import REPLY_TIMEOUT_S, ScenarioError
 from harness.scenario_file import load_scenario
 from harness.scenario_parse import scenario_world
 from harness.simulation import LapTracker, Perturbations, Simulation
@@ -153,7 +153,7 @@ class SimNode:
             self.rate_hz = float(rospy.get_param("~rate_hz", 30.0))
             self.duration = float(rospy.get_param("~duration", 0.0))
             self.lockstep = bool(rospy.get_param("~lockstep", True))
-            self.reply_timeout = float(rospy.get_param("~reply_timeout", 2.0))
+            self.reply_timeout = float(rospy.get_param("~reply_timeout", REPLY_TIMEOUT_S))
             start, perturbations, self.stop_at_lap = None, Perturbations(), False
             self.still_stop_s = None
         if self.duration < 0 or not math.isfinite(self.duration):
