@@ -579,10 +579,11 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
       (config_.floor_margin * std::min(brightness, kFullBrightness) + kFullBrightness - 1) /
           kFullBrightness,
       config_.floor_margin / kDimmestMarginDivisor);
-  // A block lit beside a shadow: the band is not dim, part of it is shaded.
-  const bool any_lit = std::any_of(block_light.begin(), block_light.end(), [&](int light) {
+  const auto is_lit = [&](int light) {
     return kLitBlockFactor.den * light >= kLitBlockFactor.num * band_light;
-  });
+  };
+  // A block lit beside a shadow: the band is not dim, part of it is shaded.
+  const bool any_lit = std::any_of(block_light.begin(), block_light.end(), is_lit);
   const int margin = std::max(any_lit ? config_.floor_margin : dimmed_margin,
                               static_cast<int>(std::ceil(config_.floor_mads * mad)));
   test.min_yellowness = median + margin;
@@ -604,10 +605,9 @@ LineDetector::FloorTest LineDetector::floorTest(const cv::Mat& bgr, int row_begi
     // than the band's would be in its light, by the margin: paint filling it is far yellower.
     // Of several, the most lenient.
     const int lit_threshold = block_floor[block] + margin;
-    const bool lit = kLitBlockFactor.den * block_light[block] >= kLitBlockFactor.num * band_light;
     const bool floor_in_more_light =
         block_floor[block] * band_light <= median * block_light[block] + margin * band_light;
-    if (lit && floor_in_more_light &&
+    if (is_lit(block_light[block]) && floor_in_more_light &&
         (test.lit_light == 0 ||
          lit_threshold * test.lit_light < test.lit_threshold * block_light[block])) {
       test.lit_light = block_light[block];
