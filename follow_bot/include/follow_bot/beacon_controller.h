@@ -228,9 +228,8 @@ struct BeaconControllerConfig {
   // The linear speed is scaled by max(0, 1 - |bearing| / speed_taper_bearing), so a robot
   // facing away turns toward the object before driving and arrives along a straight line: a
   // sideways drift would show later as a bearing error, once a box too close to fit in the
-  // frame no longer shows its centre. 3 deg rather than 11: a base 150 ms late with a 0.2 s
-  // motor lag otherwise reaches that point from 2 m still turning (0.5 deg off at the stop in
-  // the closed-loop gtest, 0.07 deg with 3).
+  // frame no longer shows its centre. 3 deg: a base 150 ms late with a 0.2 s motor lag must
+  // not reach that point from 2 m still turning.
   double speed_taper_bearing = 0.05;  // rad
   double k_bearing =
       BeaconChaserDefaults::k_bearing;  // angular = -k_bearing * bearing, rad/s per rad

@@ -474,9 +474,8 @@ Twist2D BeaconController::approach(const BlobResult& blobs, double stamp) {
   // along the column's bearing as the range. A box spilling over both sides places none and
   // the carried point stands. One end in view places the centre from the face's direction,
   // whose row-quantised fit (+-0.5 deg at 2 m) swings it ~1 cm across over 0.9 m of face:
-  // such a centre moves the carried point only 0.15 of the way (harsh sweep member 018: the
-  // last frame before the face filled the view put it 0.27 deg off, and the robot turned that
-  // far after it, 0.50 deg at the stop; 0.16 deg so).
+  // such a centre moves the carried point only 0.15 of the way, so that the last one before
+  // the face fills the view cannot turn the robot by its error.
   if (aimed_at_) {
     const double dt = stamp - last_command_stamp_;
     const Pose2D moved{arcDisplacement(last_command_.linear * dt, last_command_.angular * dt),
