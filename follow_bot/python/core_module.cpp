@@ -130,15 +130,8 @@ void bindLineDetector(py::module_& m) {
   config.def_readwrite("lower", &LineDetectorConfig::lower)
       .def_readwrite("upper", &LineDetectorConfig::upper)
       .def_readwrite("band", &LineDetectorConfig::band)
-      .def_readwrite("look_ahead_enabled", &LineDetectorConfig::look_ahead_enabled)
-      .def_readwrite("look_ahead", &LineDetectorConfig::look_ahead)
-      .def_readwrite("min_pixels", &LineDetectorConfig::min_pixels)
-      .def_readwrite("max_width_fraction", &LineDetectorConfig::max_width_fraction)
-      .def_readwrite("blob_saturation_fraction", &LineDetectorConfig::blob_saturation_fraction)
-      .def_readwrite("floor_margin", &LineDetectorConfig::floor_margin)
-      .def_readwrite("floor_mads", &LineDetectorConfig::floor_mads)
-      .def_readwrite("line_width_m", &LineDetectorConfig::line_width_m)
-      .def_readwrite("line_width_factor", &LineDetectorConfig::line_width_factor);
+      .def_readwrite("look_ahead", &LineDetectorConfig::look_ahead);
+  bindFields(config);
   defKeywordInit(config, static_cast<Validator<LineDetectorConfig>>(&validate));
 
   using RowSpan = BandMeasurement::RowSpan;
@@ -242,11 +235,8 @@ void bindColourBlobs(py::module_& m) {
   config
       .def_readwrite("colours", &ColourBlobConfig::colours,
                      "A list (assign a new one to change it).")
-      .def_readwrite("open_kernel", &ColourBlobConfig::open_kernel)
-      .def_readwrite("close_kernel", &ColourBlobConfig::close_kernel)
-      .def_readwrite("min_area", &ColourBlobConfig::min_area)
-      .def_readwrite("roundness_tolerance", &ColourBlobConfig::roundness_tolerance)
       .def_readwrite("floor_ball", &ColourBlobConfig::floor_ball, "A FloorBall or None.");
+  bindFields(config);
   defKeywordInit(config, static_cast<Validator<ColourBlobConfig>>(&validate));
   py::class_<ColourBlobConfig::FloorBall> floor_ball(config, "FloorBall");
   floor_ball.def_readwrite("radius_m", &ColourBlobConfig::FloorBall::radius_m)
@@ -401,31 +391,8 @@ void bindBeaconController(py::module_& m) {
   using Config = BeaconControllerConfig;
   py::class_<Config> config(m, "BeaconControllerConfig");
   defEnumField(config, "mode", &Config::mode, &parseBeaconMode);
-  config.def_readwrite("search_rate", &Config::search_rate)
-      .def_readwrite("follow_colour", &Config::follow_colour)
-      .def_readwrite("stop_colour", &Config::stop_colour)
-      .def_readwrite("close_area", &Config::close_area)
-      .def_readwrite("stop_min_area", &Config::stop_min_area)
-      .def_readwrite("stop_release_delay", &Config::stop_release_delay)
-      .def_readwrite("approach_speed", &Config::approach_speed)
-      .def_readwrite("approach_taper", &Config::approach_taper)
-      .def_readwrite("creep_speed", &Config::creep_speed)
-      .def_readwrite("turn_gain", &Config::turn_gain)
-      .def_readwrite("target_colour", &Config::target_colour)
-      .def_readwrite("target", &Config::target)
-      .def_readwrite("camera", &Config::camera)
-      .def_readwrite("stop_distance", &Config::stop_distance)
-      .def_readwrite("k_range", &Config::k_range)
-      .def_readwrite("max_linear", &Config::max_linear)
-      .def_readwrite("allow_reverse", &Config::allow_reverse)
-      .def_readwrite("speed_taper_bearing", &Config::speed_taper_bearing)
-      .def_readwrite("k_bearing", &Config::k_bearing)
-      .def_readwrite("max_angular", &Config::max_angular)
-      .def_readwrite("distance_tolerance", &Config::distance_tolerance)
-      .def_readwrite("bearing_tolerance", &Config::bearing_tolerance)
-      .def_readwrite("distance_release", &Config::distance_release)
-      .def_readwrite("bearing_release", &Config::bearing_release)
-      .def_readwrite("lost_hold", &Config::lost_hold);
+  bindFields(config);
+  config.def_readwrite("target", &Config::target).def_readwrite("camera", &Config::camera);
   defKeywordInit(config, static_cast<Validator<Config>>(&validate));
   m.def("check_colours_detected", &checkColoursDetected, "controller"_a, "detector"_a,
         "'' when the detector measures every colour the controller uses, else a message.");
@@ -446,15 +413,7 @@ void bindBeaconController(py::module_& m) {
 
 void bindTagDetector(py::module_& m) {
   py::class_<TagDetectorConfig> config(m, "TagDetectorConfig");
-  config.def_readwrite("family", &TagDetectorConfig::family)
-      .def_readwrite("id", &TagDetectorConfig::id)
-      .def_readwrite("size_m", &TagDetectorConfig::size_m)
-      .def_readwrite("quad_decimate", &TagDetectorConfig::quad_decimate)
-      .def_readwrite("full_resolution_below", &TagDetectorConfig::full_resolution_below)
-      .def_readwrite("min_decision_margin", &TagDetectorConfig::min_decision_margin)
-      .def_readwrite("max_hamming", &TagDetectorConfig::max_hamming)
-      .def_readwrite("ambiguity_ratio", &TagDetectorConfig::ambiguity_ratio)
-      .def_readwrite("ambiguity_px", &TagDetectorConfig::ambiguity_px);
+  bindFields(config);
   defKeywordInit(config, static_cast<Validator<TagDetectorConfig>>(&validate));
 
   py::class_<MarkerObservation> observation(
@@ -525,46 +484,23 @@ void bindSteering(py::module_& m) {
       .value(toString(LineState::kGaveUp), LineState::kGaveUp);
 
   py::class_<PdConfig> pd(m, "PdConfig", "pd's steering and speed taper.");
-  pd.def_readwrite("kp", &PdConfig::kp)
-      .def_readwrite("kd", &PdConfig::kd)
-      .def_readwrite("max_derivative_dt", &PdConfig::max_derivative_dt)
-      .def_readwrite("look_ahead_weight", &PdConfig::look_ahead_weight)
-      .def_readwrite("taper", &PdConfig::taper)
-      .def_readwrite("curvature_taper", &PdConfig::curvature_taper);
+  bindFields(pd);
   defKeywordInit(pd);
 
   py::class_<LineSearchConfig> search(m, "LineSearchConfig",
                                       "The lost-line search, timed from the last sighting.");
-  search.def_readwrite("lost_grace", &LineSearchConfig::lost_grace)
-      .def_readwrite("lost_linear", &LineSearchConfig::lost_linear)
-      .def_readwrite("lost_angular", &LineSearchConfig::lost_angular)
-      .def_readwrite("search_rate", &LineSearchConfig::search_rate)
-      .def_readwrite("search_timeout", &LineSearchConfig::search_timeout);
+  bindFields(search);
   defKeywordInit(search);
 
   py::class_<PathConfig> path(m, "PathConfig", "path's tracking law and line memory.");
-  path.def_readwrite("heading_gain", &PathConfig::heading_gain)
-      .def_readwrite("lateral_gain", &PathConfig::lateral_gain)
-      .def_readwrite("fit_length", &PathConfig::fit_length)
-      .def_readwrite("max_extrapolation", &PathConfig::max_extrapolation)
-      .def_readwrite("start_lookahead", &PathConfig::start_lookahead)
-      .def_readwrite("keep_behind", &PathConfig::keep_behind)
-      .def_readwrite("max_point_age", &PathConfig::max_point_age)
-      .def_readwrite("max_points", &PathConfig::max_points)
-      .def_readwrite("min_point_spacing", &PathConfig::min_point_spacing)
-      .def_readwrite("bridge_gap", &PathConfig::bridge_gap)
-      .def_readwrite("max_frame_gap", &PathConfig::max_frame_gap)
-      .def_readwrite("command_latency", &PathConfig::command_latency);
+  bindFields(path);
   defKeywordInit(path);
 
   py::class_<SteeringConfig> config(m, "SteeringConfig",
                                     "One configuration of the three laws, one set of limits.");
   defEnumField(config, "mode", &SteeringConfig::mode, &parseSteeringMode);
-  config.def_readwrite("max_linear", &SteeringConfig::max_linear)
-      .def_readwrite("min_linear", &SteeringConfig::min_linear)
-      .def_readwrite("max_angular", &SteeringConfig::max_angular)
-      .def_readwrite("min_confidence", &SteeringConfig::min_confidence)
-      .def_readwrite("pd", &SteeringConfig::pd)
+  bindFields(config);
+  config.def_readwrite("pd", &SteeringConfig::pd)
       .def_readwrite("search", &SteeringConfig::search)
       .def_readwrite("path", &SteeringConfig::path);
   defKeywordInit(config, static_cast<Validator<SteeringConfig>>(&validate));
@@ -640,27 +576,7 @@ void bindSteering(py::module_& m) {
 void bindSignDetector(py::module_& m) {
   using Config = SignDetectorConfig;
   py::class_<Config> config(m, "SignDetectorConfig");
-  config.def_readwrite("image_path", &Config::image_path)
-      .def_readwrite("width_m", &Config::width_m)
-      .def_readwrite("ratio", &Config::ratio)
-      .def_readwrite("min_inliers", &Config::min_inliers)
-      .def_readwrite("ransac_threshold_px", &Config::ransac_threshold_px)
-      .def_readwrite("max_reference_features", &Config::max_reference_features)
-      .def_readwrite("min_reference_features", &Config::min_reference_features)
-      .def_readwrite("max_image_features", &Config::max_image_features)
-      .def_readwrite("max_reprojection_error_px", &Config::max_reprojection_error_px)
-      .def_readwrite("refine_passes", &Config::refine_passes)
-      .def_readwrite("refine_iterations", &Config::refine_iterations)
-      .def_readwrite("min_correlation", &Config::min_correlation)
-      .def_readwrite("max_refine_shift_px", &Config::max_refine_shift_px)
-      .def_readwrite("ambiguity_px", &Config::ambiguity_px)
-      .def_readwrite("track", &Config::track)
-      .def_readwrite("track_features", &Config::track_features)
-      .def_readwrite("track_window_px", &Config::track_window_px)
-      .def_readwrite("track_levels", &Config::track_levels)
-      .def_readwrite("max_track_motion_px", &Config::max_track_motion_px)
-      .def_readwrite("track_refine_passes", &Config::track_refine_passes)
-      .def_readwrite("track_refine_iterations", &Config::track_refine_iterations);
+  bindFields(config);
   defKeywordInit(config, static_cast<Validator<Config>>(&validate));
 
   py::class_<SignDetector>(
@@ -694,23 +610,8 @@ void bindParkingServo(py::module_& m) {
 
   using Config = ParkingServoConfig;
   py::class_<Config> config(m, "ParkingServoConfig");
-  config.def_readwrite("standoff_m", &Config::standoff_m)
-      .def_readwrite("gain", &Config::gain)
-      .def_readwrite("steer_gain", &Config::steer_gain)
-      .def_readwrite("max_bearing_rad", &Config::max_bearing_rad)
-      .def_readwrite("backoff_m", &Config::backoff_m)
-      .def_readwrite("max_linear", &Config::max_linear)
-      .def_readwrite("max_angular", &Config::max_angular)
-      .def_readwrite("search_rate", &Config::search_rate)
-      .def_readwrite("search_step_rad", &Config::search_step_rad)
-      .def_readwrite("search_pause", &Config::search_pause)
-      .def_readwrite("lost_timeout", &Config::lost_timeout)
-      .def_readwrite("position_tolerance", &Config::position_tolerance)
-      .def_readwrite("lateral_tolerance", &Config::lateral_tolerance)
-      .def_readwrite("heading_tolerance_rad", &Config::heading_tolerance_rad)
-      .def_readwrite("linear_tolerance", &Config::linear_tolerance)
-      .def_readwrite("angular_tolerance", &Config::angular_tolerance)
-      .def_readwrite("camera", &Config::camera);
+  bindFields(config);
+  config.def_readwrite("camera", &Config::camera);
   defKeywordInit(config, static_cast<Validator<Config>>(&validate));
 
   py::class_<ParkingError> error(m, "ParkingError",

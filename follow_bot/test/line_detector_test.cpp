@@ -1097,11 +1097,13 @@ TEST(LineDetector, ValidatesItsConfiguration) {
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.floor_margin = 256; }),
             "floor_margin must be in [0, 255], got 256");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.floor_mads = -1.0; }),
-            "floor_mads must be finite and >= 0, got -1");
+            "floor_mads must be >= 0, got -1");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.line_width_m = 0.0; }),
-            "line_width_m must be finite and > 0, got 0");
+            "line_width_m must be > 0, got 0");
   EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.line_width_factor = -2.0; }),
-            "line_width_factor must be finite and >= 0, got -2");
+            "line_width_factor must be >= 0, got -2");
+  EXPECT_EQ(error_for([](LineDetectorConfig& c) { c.floor_mads = std::nan(""); }),
+            "floor_mads must be >= 0, got nan");
   LineDetectorConfig bad;
   bad.band.rows = -5;
   EXPECT_THROW(LineDetector{bad}, std::invalid_argument);

@@ -45,9 +45,7 @@ void check(const T& config) {
 
 void bindOverlay(py::module_& m) {
   py::class_<OverlayConfig> config(m, "OverlayConfig", "The lecture's red circle at the centre.");
-  config.def_readwrite("radius_px", &OverlayConfig::radius_px)
-      .def_readwrite("thickness_px", &OverlayConfig::thickness_px)
-      .def_readwrite("min_image_size", &OverlayConfig::min_image_size);
+  bindFields(config);
   defKeywordInit(config, static_cast<Validator<OverlayConfig>>(&validate));
   m.def(
       "draw_overlay",
@@ -70,13 +68,7 @@ void bindMatching(py::module_& m) {
 
   py::class_<MatchOptions> options(m, "MatchOptions");
   defEnumField(options, "detector", &MatchOptions::detector, &parseDetectorName);
-  options.def_readwrite("max_features", &MatchOptions::max_features)
-      .def_readwrite("ratio", &MatchOptions::ratio)
-      .def_readwrite("ransac_threshold_px", &MatchOptions::ransac_threshold_px)
-      .def_readwrite("min_inliers", &MatchOptions::min_inliers)
-      .def_readwrite("min_contrast", &MatchOptions::min_contrast)
-      .def_readwrite("refine", &MatchOptions::refine)
-      .def_readwrite("held_out_every", &MatchOptions::held_out_every);
+  bindFields(options);
   defKeywordInit(options, static_cast<Validator<MatchOptions>>(&validate));
 
   py::class_<PairMatch> pair(m, "PairMatch",

@@ -276,7 +276,7 @@ TEST(HomographyDefect, RejectsCollapsingTheMatchedRegionOntoALine) {
 TEST(MatchOptions, RejectsHoldingOutEveryInlier) {
   MatchOptions options;
   options.held_out_every = 1;
-  EXPECT_EQ(validate(options), "held_out_every must be >= 2 (1 would hold out all)");
+  EXPECT_EQ(validate(options), "held_out_every must be >= 2, got 1 (1 would hold out all)");
   options.held_out_every = 2;
   EXPECT_EQ(validate(options), "");
 }

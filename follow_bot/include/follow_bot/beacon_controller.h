@@ -16,6 +16,7 @@
 
 #include "follow_bot/BeaconChaserDefaults.h"
 #include "follow_bot/colour_blobs.h"
+#include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/velocity_limiter.h"
 
@@ -247,6 +248,34 @@ struct BeaconControllerConfig {
   double distance_release = 0.015;                                // m
   double bearing_release = 3.0 * 3.14159265358979323846 / 180.0;  // rad
   double lost_hold = 1.0;  // s to stand still after losing the target before searching
+
+  static constexpr auto fields() {
+    using C = BeaconControllerConfig;
+    return std::make_tuple(cfgField("search_rate", &C::search_rate, atLeast(0.0)),
+                           field("follow_colour", &C::follow_colour),
+                           field("stop_colour", &C::stop_colour),
+                           cfgField("close_area", &C::close_area, atLeast(0.0)),
+                           cfgField("stop_min_area", &C::stop_min_area, atLeast(0.0)),
+                           cfgField("stop_release_delay", &C::stop_release_delay, atLeast(0.0)),
+                           cfgField("approach_speed", &C::approach_speed, atLeast(0.0)),
+                           cfgField("approach_taper", &C::approach_taper, atLeast(0.0)),
+                           cfgField("creep_speed", &C::creep_speed, atLeast(0.0)),
+                           field("hold_release", &C::hold_release, atLeast(0.0)),
+                           cfgField("turn_gain", &C::turn_gain, atLeast(0.0)),
+                           field("target_colour", &C::target_colour),
+                           cfgField("stop_distance", &C::stop_distance, positive()),
+                           cfgField("k_range", &C::k_range, positive()),
+                           cfgField("max_linear", &C::max_linear, positive()),
+                           field("allow_reverse", &C::allow_reverse),
+                           field("speed_taper_bearing", &C::speed_taper_bearing, positive()),
+                           cfgField("k_bearing", &C::k_bearing, atLeast(0.0)),
+                           cfgField("max_angular", &C::max_angular, positive()),
+                           field("distance_tolerance", &C::distance_tolerance, positive()),
+                           field("bearing_tolerance", &C::bearing_tolerance, positive()),
+                           field("distance_release", &C::distance_release),
+                           field("bearing_release", &C::bearing_release),
+                           field("lost_hold", &C::lost_hold, atLeast(0.0)));
+  }
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field,

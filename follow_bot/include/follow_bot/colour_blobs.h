@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/BeaconChaserDefaults.h"
+#include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
@@ -79,6 +80,14 @@ struct ColourBlobConfig {
     CameraGeometry camera;
   };
   std::optional<FloorBall> floor_ball;
+
+  static constexpr auto fields() {
+    using C = ColourBlobConfig;
+    return std::make_tuple(
+        field("open_kernel", &C::open_kernel), field("close_kernel", &C::close_kernel),
+        cfgField("min_area", &C::min_area, atLeast(0.0)),
+        field("roundness_tolerance", &C::roundness_tolerance, inRange(0.0, 1.0)));
+  }
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field,

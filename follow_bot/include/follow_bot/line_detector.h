@@ -20,6 +20,7 @@
 #include "follow_bot/FollowerDefaults.h"
 #include "follow_bot/hsv_box.h"
 #include "follow_bot/line_band.h"
+#include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {
@@ -75,6 +76,19 @@ struct LineDetectorConfig {
   // Confidence falls once the line's mean width per row exceeds this fraction of the image
   // width (a frame full of yellow is not a line); see BandMeasurement::confidence.
   double max_width_fraction = 0.35;
+
+  static constexpr auto fields() {
+    using C = LineDetectorConfig;
+    return std::make_tuple(
+        cfgField("look_ahead_enabled", &C::look_ahead_enabled, {}, "look_ahead"),
+        cfgField("min_pixels", &C::min_pixels, atLeast(1)),
+        field("max_width_fraction", &C::max_width_fraction, aboveAtMost(0.0, 1.0)),
+        cfgField("blob_saturation_fraction", &C::blob_saturation_fraction, inRange(0.0, 1.0)),
+        cfgField("floor_margin", &C::floor_margin, inRange(0, 255)),
+        cfgField("floor_mads", &C::floor_mads, atLeast(0.0)),
+        cfgField("line_width_m", &C::line_width_m, positive(), "line_width"),
+        cfgField("line_width_factor", &C::line_width_factor, atLeast(0.0)));
+  }
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field.

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "follow_bot/PanoramaDefaults.h"
+#include "follow_bot_common/config_fields.h"
 
 namespace follow_bot {
 
@@ -23,6 +24,20 @@ struct PanoramaCaptureConfig {
       Defaults::yaw_tolerance_deg * kRadPerDeg;  // rad: close enough to a heading
   int settle_frames = Defaults::settle_frames;   // frames held still at a heading before grabbing
   bool return_to_start = Defaults::return_to_start;  // turn back to the start heading at the end
+
+  // The angles' and rates' ranges are linked to each other: validate() checks them.
+  static constexpr auto fields() {
+    using C = PanoramaCaptureConfig;
+    return std::make_tuple(
+        cfgField("total_angle", &C::total_angle, {}, "total_angle_deg", kRadPerDeg),
+        cfgField("step_angle", &C::step_angle, {}, "step_angle_deg", kRadPerDeg),
+        cfgField("max_turn_rate", &C::max_turn_rate, positive(), "max_angular"),
+        cfgField("min_turn_rate", &C::min_turn_rate, {}, "min_angular"),
+        cfgField("yaw_gain", &C::yaw_gain, positive()),
+        cfgField("yaw_tolerance", &C::yaw_tolerance, {}, "yaw_tolerance_deg", kRadPerDeg),
+        cfgField("settle_frames", &C::settle_frames, atLeast(0)),
+        cfgField("return_to_start", &C::return_to_start));
+  }
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field.

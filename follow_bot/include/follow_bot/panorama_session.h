@@ -13,6 +13,7 @@
 #include "follow_bot/PanoramaDefaults.h"
 #include "follow_bot/panorama_capture.h"
 #include "follow_bot/panorama_stitch.h"
+#include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/status_report.h"
 
 namespace follow_bot {
@@ -24,6 +25,12 @@ struct PanoramaSessionConfig {
   StitchMethod method = StitchMethod::kAuto;
   double frame_timeout = PanoramaDefaults::frame_timeout;      // s, wall time: frames stopped
   double capture_timeout = PanoramaDefaults::capture_timeout;  // s, ROS time
+
+  static constexpr auto fields() {
+    using C = PanoramaSessionConfig;
+    return std::make_tuple(cfgField("frame_timeout", &C::frame_timeout),
+                           cfgField("capture_timeout", &C::capture_timeout));
+  }
 };
 
 class PanoramaSession {

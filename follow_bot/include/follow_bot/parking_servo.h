@@ -30,6 +30,7 @@
 
 #include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
+#include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/velocity_limiter.h"
 
@@ -59,6 +60,29 @@ struct ParkingServoConfig {
   double linear_tolerance = 0.01;   // m/s, commanded speed to count as stopped
   double angular_tolerance = 0.02;  // rad/s
   CameraGeometry camera;            // mounting (height, pitch, x offset) for cVe and the base frame
+
+  static constexpr auto fields() {
+    using C = ParkingServoConfig;
+    return std::make_tuple(
+        cfgField("standoff_m", &C::standoff_m, positive(), "standoff"),
+        cfgField("gain", &C::gain, positive()),
+        cfgField("steer_gain", &C::steer_gain, atLeast(1.0)),
+        cfgField("max_bearing_rad", &C::max_bearing_rad, inRange(0.0, 0.5), "max_bearing_deg",
+                 kRadPerDeg),
+        cfgField("backoff_m", &C::backoff_m, positive(), "backoff"),
+        cfgField("max_linear", &C::max_linear, positive()),
+        cfgField("max_angular", &C::max_angular, positive()),
+        cfgField("search_rate", &C::search_rate, inRange(-3.2, 3.2)),
+        cfgField("search_step_rad", &C::search_step_rad, positive(), "search_step_deg", kRadPerDeg),
+        cfgField("search_pause", &C::search_pause, atLeast(0.0)),
+        cfgField("lost_timeout", &C::lost_timeout, atLeast(0.0)),
+        cfgField("position_tolerance", &C::position_tolerance, positive()),
+        cfgField("lateral_tolerance", &C::lateral_tolerance, positive()),
+        cfgField("heading_tolerance_rad", &C::heading_tolerance_rad, positive(),
+                 "heading_tolerance_deg", kRadPerDeg),
+        field("linear_tolerance", &C::linear_tolerance, positive()),
+        field("angular_tolerance", &C::angular_tolerance, positive()));
+  }
 };
 
 std::string validate(const ParkingServoConfig& config);

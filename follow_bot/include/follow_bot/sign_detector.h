@@ -22,6 +22,7 @@
 
 #include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
+#include "follow_bot_common/config_fields.h"
 
 namespace follow_bot {
 
@@ -53,6 +54,31 @@ struct SignDetectorConfig {
   // and steps than a searched one (the alignment is much of a frame's cost).
   int track_refine_passes = 1;      // render-and-align passes on a tracked frame, all required
   int track_refine_iterations = 5;  // alignment step limit per pass on a tracked frame
+
+  static constexpr auto fields() {
+    using C = SignDetectorConfig;
+    return std::make_tuple(
+        cfgField("image_path", &C::image_path, {}, "sign_image"),
+        cfgField("width_m", &C::width_m, positive(), "sign_width"),
+        field("ratio", &C::ratio, inRange(0.1, 1.0)),
+        field("min_inliers", &C::min_inliers, atLeast(4)),
+        field("ransac_threshold_px", &C::ransac_threshold_px, positive()),
+        field("max_reference_features", &C::max_reference_features, atLeast(0)),
+        field("min_reference_features", &C::min_reference_features, atLeast(4)),
+        field("max_image_features", &C::max_image_features, atLeast(0)),
+        field("max_reprojection_error_px", &C::max_reprojection_error_px, positive()),
+        field("refine_passes", &C::refine_passes, atLeast(0)),
+        field("refine_iterations", &C::refine_iterations, atLeast(1)),
+        field("min_correlation", &C::min_correlation, inRange(0.0, 1.0)),
+        field("max_refine_shift_px", &C::max_refine_shift_px, positive()),
+        field("ambiguity_px", &C::ambiguity_px, atLeast(0.0)), field("track", &C::track),
+        field("track_features", &C::track_features),
+        field("track_window_px", &C::track_window_px, atLeast(5)),
+        field("track_levels", &C::track_levels, atLeast(0)),
+        field("max_track_motion_px", &C::max_track_motion_px, positive()),
+        field("track_refine_passes", &C::track_refine_passes, atLeast(1)),
+        field("track_refine_iterations", &C::track_refine_iterations, atLeast(1)));
+  }
 };
 
 // Empty when the configuration is usable (the image itself is checked by the constructor),

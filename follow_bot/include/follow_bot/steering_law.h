@@ -13,6 +13,7 @@
 #include <string>
 
 #include "follow_bot/line_detector.h"
+#include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/velocity_limiter.h"
 
@@ -54,6 +55,16 @@ struct PdConfig {
   // [min_linear, max_linear]; the curvature term needs a found look-ahead band.
   double taper = FollowerDefaults::taper;  // speed fraction lost per unit |e|
   double curvature_taper = 0.5;            // speed fraction lost per unit |e_ahead - e_near|
+
+  static constexpr auto fields() {
+    using C = PdConfig;
+    return std::make_tuple(cfgField("kp", &C::kp, atLeast(0.0)),
+                           cfgField("kd", &C::kd, atLeast(0.0)),
+                           field("max_derivative_dt", &C::max_derivative_dt, positive()),
+                           cfgField("look_ahead_weight", &C::look_ahead_weight, inRange(0.0, 1.0)),
+                           cfgField("taper", &C::taper, atLeast(0.0)),
+                           field("curvature_taper", &C::curvature_taper, atLeast(0.0)));
+  }
 };
 
 // The lost-line search (pd's, and so path's once its memory runs out), timed from the last
@@ -64,6 +75,15 @@ struct LineSearchConfig {
   double lost_angular = 0.4;                           // rad/s toward the last side in kLost
   double search_rate = FollowerDefaults::search_rate;  // rad/s spin toward the last side
   double search_timeout = 12.0;  // s of kSearching (~1 turn at 0.6 rad/s) before kGaveUp
+
+  static constexpr auto fields() {
+    using C = LineSearchConfig;
+    return std::make_tuple(field("lost_grace", &C::lost_grace, atLeast(0.0)),
+                           field("lost_linear", &C::lost_linear, atLeast(0.0)),
+                           field("lost_angular", &C::lost_angular, atLeast(0.0)),
+                           cfgField("search_rate", &C::search_rate, atLeast(0.0)),
+                           field("search_timeout", &C::search_timeout, atLeast(0.0)));
+  }
 };
 
 // path's tracking law and line memory; the law itself is described in line_path.h.
@@ -101,6 +121,22 @@ struct PathConfig {
   // actuation delay). The law steers from where the commands already sent will have taken the
   // robot by then (line_path.h); 0 steers from where the frame was taken.
   double command_latency = FollowerDefaults::command_latency;
+
+  static constexpr auto fields() {
+    using C = PathConfig;
+    return std::make_tuple(cfgField("heading_gain", &C::heading_gain, atLeast(0.0)),
+                           cfgField("lateral_gain", &C::lateral_gain, atLeast(0.0)),
+                           field("fit_length", &C::fit_length, positive()),
+                           field("max_extrapolation", &C::max_extrapolation, atLeast(0.0)),
+                           field("start_lookahead", &C::start_lookahead, positive()),
+                           field("keep_behind", &C::keep_behind, atLeast(0.0)),
+                           field("max_point_age", &C::max_point_age, positive()),
+                           field("max_points", &C::max_points, atLeast(3)),
+                           field("min_point_spacing", &C::min_point_spacing, atLeast(0.0)),
+                           field("bridge_gap", &C::bridge_gap, positive()),
+                           field("max_frame_gap", &C::max_frame_gap, positive()),
+                           cfgField("command_latency", &C::command_latency, inRange(0.0, 1.0)));
+  }
 };
 
 // Defaults suit a TurtleBot-class robot with a 640x480, 60 deg HFOV camera about 0.3 m up,
@@ -122,6 +158,14 @@ struct SteeringConfig {
   PdConfig pd;
   LineSearchConfig search;
   PathConfig path;
+
+  static constexpr auto fields() {
+    using C = SteeringConfig;
+    return std::make_tuple(cfgField("max_linear", &C::max_linear, positive()),
+                           cfgField("min_linear", &C::min_linear, atLeast(0.0)),
+                           cfgField("max_angular", &C::max_angular, positive()),
+                           field("min_confidence", &C::min_confidence, inRange(0.0, 1.0)));
+  }
 };
 
 // Empty when the configuration is usable (every section, whatever the mode), otherwise a

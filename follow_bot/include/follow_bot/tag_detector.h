@@ -33,6 +33,7 @@
 
 #include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
+#include "follow_bot_common/config_fields.h"
 
 namespace follow_bot {
 
@@ -54,6 +55,20 @@ struct TagDetectorConfig {
   // reprojection residuals are within this ratio, or both below ambiguity_px (corner noise).
   double ambiguity_ratio = 1.5;
   double ambiguity_px = 0.2;
+
+  static constexpr auto fields() {
+    using C = TagDetectorConfig;
+    return std::make_tuple(
+        cfgField("family", &C::family, {}, "tag_family"),
+        cfgField("id", &C::id, inRange(0, 1e6), "tag_id"),
+        cfgField("size_m", &C::size_m, positive(), "tag_size"),
+        cfgField("quad_decimate", &C::quad_decimate, inRange(1.0, 8.0)),
+        cfgField("full_resolution_below", &C::full_resolution_below, atLeast(0.0)),
+        cfgField("min_decision_margin", &C::min_decision_margin, inRange(0.0, 255.0)),
+        cfgField("max_hamming", &C::max_hamming, inRange(0, 3)),
+        field("ambiguity_ratio", &C::ambiguity_ratio, atLeast(1.0)),
+        field("ambiguity_px", &C::ambiguity_px, atLeast(0.0)));
+  }
 };
 
 // Empty when usable, otherwise a message naming the first bad field.

@@ -327,34 +327,17 @@ const char* toString(BeaconState state) {
 
 std::string validate(const BeaconControllerConfig& c) {
   for (const std::string& error : {
-           requireAtLeast("search_rate", c.search_rate, 0.0),
+           checkFields(c),
            requireName("follow_colour", c.follow_colour),
            requireName("stop_colour", c.stop_colour),
            c.follow_colour == c.stop_colour && !c.follow_colour.empty()
                ? "follow_colour and stop_colour must differ, both are '" + c.follow_colour + "'"
                : "",
-           requireAtLeast("close_area", c.close_area, 0.0),
-           requireAtLeast("stop_min_area", c.stop_min_area, 0.0),
-           requireAtLeast("stop_release_delay", c.stop_release_delay, 0.0),
-           requireAtLeast("approach_speed", c.approach_speed, 0.0),
-           requireAtLeast("approach_taper", c.approach_taper, 0.0),
-           requireAtLeast("creep_speed", c.creep_speed, 0.0),
-           requireAtLeast("hold_release", c.hold_release, 0.0),
-           requireAtLeast("turn_gain", c.turn_gain, 0.0),
            requireName("target_colour", c.target_colour),
            prefixed("target.", validate(c.target)),
            prefixed("camera.", validate(c.camera)),
-           requirePositive("stop_distance", c.stop_distance),
-           requirePositive("k_range", c.k_range),
-           requirePositive("max_linear", c.max_linear),
-           requirePositive("speed_taper_bearing", c.speed_taper_bearing),
-           requireAtLeast("k_bearing", c.k_bearing, 0.0),
-           requirePositive("max_angular", c.max_angular),
-           requirePositive("distance_tolerance", c.distance_tolerance),
-           requirePositive("bearing_tolerance", c.bearing_tolerance),
            requireAtLeast("distance_release", c.distance_release, c.distance_tolerance),
            requireAtLeast("bearing_release", c.bearing_release, c.bearing_tolerance),
-           requireAtLeast("lost_hold", c.lost_hold, 0.0),
        }) {
     if (!error.empty()) return error;
   }

@@ -295,8 +295,7 @@ std::string validate(const ColourBlobConfig& config) {
   for (const std::string& error : {
            checkKernel("open_kernel", config.open_kernel),
            checkKernel("close_kernel", config.close_kernel),
-           requireAtLeast("min_area", config.min_area, 0.0),
-           requireInRange("roundness_tolerance", config.roundness_tolerance, 0.0, 1.0),
+           checkFields(config),
        }) {
     if (!error.empty()) return error;
   }

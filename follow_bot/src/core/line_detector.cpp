@@ -243,22 +243,8 @@ std::string validate(const LineDetectorConfig& config) {
   if (config.look_ahead_enabled && !(config.look_ahead.distance_m > config.band.distance_m)) {
     message << "look_ahead.distance_m (" << config.look_ahead.distance_m
             << ") must be beyond band.distance_m (" << config.band.distance_m << ")";
-  } else if (config.min_pixels < 1) {
-    message << "min_pixels must be >= 1, got " << config.min_pixels;
-  } else if (!std::isfinite(config.max_width_fraction) || config.max_width_fraction <= 0.0 ||
-             config.max_width_fraction > 1.0) {
-    message << "max_width_fraction must be in (0, 1], got " << config.max_width_fraction;
-  } else if (!(config.blob_saturation_fraction >= 0.0 && config.blob_saturation_fraction <= 1.0)) {
-    message << "blob_saturation_fraction must be in [0, 1], got "
-            << config.blob_saturation_fraction;
-  } else if (!inside(config.floor_margin, 0, 255)) {
-    message << "floor_margin must be in [0, 255], got " << config.floor_margin;
-  } else if (!(config.floor_mads >= 0.0 && std::isfinite(config.floor_mads))) {
-    message << "floor_mads must be finite and >= 0, got " << config.floor_mads;
-  } else if (!(config.line_width_m > 0.0 && std::isfinite(config.line_width_m))) {
-    message << "line_width_m must be finite and > 0, got " << config.line_width_m;
-  } else if (!(config.line_width_factor >= 0.0 && std::isfinite(config.line_width_factor))) {
-    message << "line_width_factor must be finite and >= 0, got " << config.line_width_factor;
+  } else {
+    return checkFields(config);
   }
   return message.str();
 }

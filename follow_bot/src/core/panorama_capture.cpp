@@ -17,17 +17,13 @@ std::string validate(const PanoramaCaptureConfig& config) {
   if (!(config.step_angle > 0.0 && config.step_angle <= config.total_angle)) {
     return "step_angle must be in (0, total_angle] rad";
   }
-  if (!(config.max_turn_rate > 0.0 && std::isfinite(config.max_turn_rate))) {
-    return "max_turn_rate must be > 0 rad/s";
-  }
+  if (const std::string error = checkFields(config); !error.empty()) return error;
   if (!(config.min_turn_rate > 0.0 && config.min_turn_rate <= config.max_turn_rate)) {
     return "min_turn_rate must be in (0, max_turn_rate] rad/s";
   }
-  if (!(config.yaw_gain > 0.0 && std::isfinite(config.yaw_gain))) return "yaw_gain must be > 0";
   if (!(config.yaw_tolerance > 0.0 && config.yaw_tolerance < config.step_angle / 2.0)) {
     return "yaw_tolerance must be in (0, step_angle / 2) rad";
   }
-  if (config.settle_frames < 0) return "settle_frames must be >= 0";
   return "";
 }
 

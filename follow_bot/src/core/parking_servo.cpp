@@ -64,22 +64,7 @@ const char* toString(ParkingState state) {
 
 std::string validate(const ParkingServoConfig& config) {
   for (const std::string& error : {
-           requirePositive("standoff_m", config.standoff_m),
-           requirePositive("gain", config.gain),
-           requireAtLeast("steer_gain", config.steer_gain, 1.0),
-           requireInRange("max_bearing_rad", config.max_bearing_rad, 0.0, 0.5),
-           requirePositive("backoff_m", config.backoff_m),
-           requirePositive("max_linear", config.max_linear),
-           requirePositive("max_angular", config.max_angular),
-           requireInRange("search_rate", config.search_rate, -3.2, 3.2),
-           requirePositive("search_step_rad", config.search_step_rad),
-           requireAtLeast("search_pause", config.search_pause, 0.0),
-           requireAtLeast("lost_timeout", config.lost_timeout, 0.0),
-           requirePositive("position_tolerance", config.position_tolerance),
-           requirePositive("lateral_tolerance", config.lateral_tolerance),
-           requirePositive("heading_tolerance_rad", config.heading_tolerance_rad),
-           requirePositive("linear_tolerance", config.linear_tolerance),
-           requirePositive("angular_tolerance", config.angular_tolerance),
+           checkFields(config),
            validate(config.camera),
        }) {
     if (!error.empty()) return error;

@@ -163,25 +163,8 @@ std::optional<cv::Matx33d> alignmentStep(const cv::Mat& camera, const cv::Mat& r
 std::string validate(const SignDetectorConfig& config) {
   if (config.image_path.empty()) return "image_path must name the sign's reference picture";
   for (const std::string& error : {
-           requirePositive("width_m", config.width_m),
-           requireInRange("ratio", config.ratio, 0.1, 1.0),
-           requireAtLeast("min_inliers", config.min_inliers, 4),
-           requirePositive("ransac_threshold_px", config.ransac_threshold_px),
-           requireAtLeast("max_reference_features", config.max_reference_features, 0),
-           requireAtLeast("min_reference_features", config.min_reference_features, 4),
-           requireAtLeast("max_image_features", config.max_image_features, 0),
-           requirePositive("max_reprojection_error_px", config.max_reprojection_error_px),
-           requireAtLeast("refine_passes", config.refine_passes, 0),
-           requireAtLeast("refine_iterations", config.refine_iterations, 1),
-           requireInRange("min_correlation", config.min_correlation, 0.0, 1.0),
-           requirePositive("max_refine_shift_px", config.max_refine_shift_px),
-           requireAtLeast("ambiguity_px", config.ambiguity_px, 0.0),
+           checkFields(config),
            requireAtLeast("track_features", config.track_features, config.min_inliers),
-           requireAtLeast("track_window_px", config.track_window_px, 5),
-           requireAtLeast("track_levels", config.track_levels, 0),
-           requirePositive("max_track_motion_px", config.max_track_motion_px),
-           requireAtLeast("track_refine_passes", config.track_refine_passes, 1),
-           requireAtLeast("track_refine_iterations", config.track_refine_iterations, 1),
        }) {
     if (!error.empty()) return error;
   }

@@ -139,19 +139,7 @@ std::string validate(const TagDetectorConfig& config) {
     for (const FamilyFactory& family : kFamilies) names += std::string(" ") + family.name;
     return "family must be one of" + names + ", got '" + config.family + "'";
   }
-  for (const std::string& error : {
-           requireInRange("id", config.id, 0, 1e6),
-           requirePositive("size_m", config.size_m),
-           requireInRange("quad_decimate", config.quad_decimate, 1.0, 8.0),
-           requireAtLeast("full_resolution_below", config.full_resolution_below, 0.0),
-           requireInRange("min_decision_margin", config.min_decision_margin, 0.0, 255.0),
-           requireInRange("max_hamming", config.max_hamming, 0, 3),
-           requireAtLeast("ambiguity_ratio", config.ambiguity_ratio, 1.0),
-           requireAtLeast("ambiguity_px", config.ambiguity_px, 0.0),
-       }) {
-    if (!error.empty()) return error;
-  }
-  return "";
+  return checkFields(config);
 }
 
 struct TagDetector::Impl {

@@ -36,4 +36,12 @@ inline std::string requireInRange(const char* name, double value, double min, do
   return message.str();
 }
 
+// In (min, max]: above min, at most max.
+inline std::string requireAboveAtMost(const char* name, double value, double min, double max) {
+  if (std::isfinite(value) && value > min && value <= max) return "";
+  std::ostringstream message;
+  message << name << " must be in (" << min << ", " << max << "], got " << value;
+  return message.str();
+}
+
 }  // namespace follow_bot

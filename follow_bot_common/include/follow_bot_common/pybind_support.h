@@ -26,6 +26,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot_common/config_fields.h"
+
 namespace pybind_support {
 
 namespace py = pybind11;
@@ -107,6 +109,13 @@ inline std::string reprFields(const py::object& self) {
 
 template <class T>
 using Validator = std::string (*)(const T&);
+
+// A read-write attribute for each field T::fields() lists (config_fields.h), named as in C++.
+template <class T>
+void bindFields(py::class_<T>& cls) {
+  follow_bot::forEachField<T>(
+      [&](const auto& field) { cls.def_readwrite(field.name, field.member); });
+}
 
 // A keyword constructor Config(field=value, ...): every other field keeps its C++ default, an
 // unknown keyword raises TypeError, and the result must pass the C++ validate() (ValueError

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
+#include "follow_bot_common/config_fields.h"
 #include "image_converter/MatchingDefaults.h"
 
 namespace image_converter {
@@ -44,6 +45,21 @@ struct MatchOptions {
   // kept only when it lowers the error on inlier matches held out of the fit (see matchPair).
   bool refine = true;
   int held_out_every = 5;  // every n-th RANSAC inlier is held out to judge the refinement
+
+  static constexpr auto fields() {
+    using C = MatchOptions;
+    using follow_bot::atLeast;
+    return std::make_tuple(
+        follow_bot::field("max_features", &C::max_features, atLeast(10)),
+        follow_bot::field("ratio", &C::ratio, follow_bot::aboveAtMost(0.0, 1.0)),
+        follow_bot::field("ransac_threshold_px", &C::ransac_threshold_px, follow_bot::positive()),
+        follow_bot::cfgField("min_inliers", &C::min_inliers,
+                             atLeast(4).because("a homography needs 4 points")),
+        follow_bot::field("min_contrast", &C::min_contrast, atLeast(0.0)),
+        follow_bot::field("refine", &C::refine),
+        follow_bot::field("held_out_every", &C::held_out_every,
+                          atLeast(2).because("1 would hold out all")));
+  }
 };
 
 // Empty when the options are usable, otherwise a message naming the first bad field.

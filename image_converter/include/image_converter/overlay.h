@@ -5,6 +5,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot_common/config_fields.h"
 #include "image_converter/ImageConverterDefaults.h"
 
 namespace image_converter {
@@ -13,6 +14,15 @@ struct OverlayConfig {
   int radius_px = ImageConverterDefaults::circle_radius;        // circle radius, pixels
   int thickness_px = ImageConverterDefaults::circle_thickness;  // outline thickness, pixels
   int min_image_size = 50;  // the circle is drawn only when width and height exceed this
+
+  static constexpr auto fields() {
+    using C = OverlayConfig;
+    return std::make_tuple(
+        follow_bot::cfgField("radius_px", &C::radius_px, follow_bot::positive(), "circle_radius"),
+        follow_bot::cfgField("thickness_px", &C::thickness_px, follow_bot::positive(),
+                             "circle_thickness"),
+        follow_bot::field("min_image_size", &C::min_image_size, follow_bot::atLeast(0)));
+  }
 };
 
 // Empty when the configuration can be drawn (positive radius and thickness, non-negative

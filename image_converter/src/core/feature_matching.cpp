@@ -205,15 +205,7 @@ std::string detectorName(Detector detector) {
   return "orb";
 }
 
-std::string validate(const MatchOptions& options) {
-  if (options.max_features < 10) return "max_features must be >= 10";
-  if (!(options.ratio > 0.0 && options.ratio <= 1.0)) return "ratio must be in (0, 1]";
-  if (!(options.ransac_threshold_px > 0.0)) return "ransac_threshold_px must be > 0";
-  if (options.min_inliers < 4) return "min_inliers must be >= 4 (a homography needs 4 points)";
-  if (!(options.min_contrast >= 0.0)) return "min_contrast must be >= 0";
-  if (options.held_out_every < 2) return "held_out_every must be >= 2 (1 would hold out all)";
-  return "";
-}
+std::string validate(const MatchOptions& options) { return follow_bot::checkFields(options); }
 
 std::string checkImage(const cv::Mat& image, const std::string& label, double min_contrast) {
   if (image.empty()) return label + " is empty";

@@ -4,17 +4,7 @@
 
 namespace image_converter {
 
-std::string validate(const OverlayConfig& config) {
-  if (config.radius_px <= 0)
-    return "radius_px must be > 0, got " + std::to_string(config.radius_px);
-  if (config.thickness_px <= 0) {
-    return "thickness_px must be > 0, got " + std::to_string(config.thickness_px);
-  }
-  if (config.min_image_size < 0) {
-    return "min_image_size must be >= 0, got " + std::to_string(config.min_image_size);
-  }
-  return "";
-}
+std::string validate(const OverlayConfig& config) { return follow_bot::checkFields(config); }
 
 bool isValid(const OverlayConfig& config) { return validate(config).empty(); }
 

@@ -17,6 +17,7 @@
 #include <pluginlib/class_list_macros.hpp>
 
 #include "follow_bot_common/ros/camera_input.h"
+#include "follow_bot_common/ros/config_mapping.h"
 #include "follow_bot_common/ros/params.h"
 #include "follow_bot_common/ros/topics.h"
 #include "image_converter/ImageConverterConfig.h"
@@ -40,8 +41,7 @@ void ImageConverterNodelet::init() {
 
   const ImageConverterConfig cfg =
       follow_bot::readConfig<ImageConverterConfig>(pnh);  // throws on bad ~params
-  overlay_.radius_px = cfg.circle_radius;
-  overlay_.thickness_px = cfg.circle_thickness;
+  follow_bot::assignFromConfig(overlay_, cfg);
   display_ = cfg.display;
   transport_ = cfg.image_transport;
   if (display_ && !displayAvailable()) {

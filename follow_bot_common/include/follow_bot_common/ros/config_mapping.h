@@ -7,6 +7,11 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+
+#include <boost/any.hpp>
+
+#include "follow_bot_common/config_fields.h"
 
 namespace follow_bot {
 
@@ -35,6 +40,39 @@ inline void requireLinked(bool ok, const std::string& rule, double a, double b) 
   std::ostringstream error;
   error << rule << ", got " << a << " and " << b;
   throw std::invalid_argument(error.str());
+}
+
+// The value of the .cfg parameter `name` in `config` (a generated dynamic_reconfigure ConfigT), as
+// a T: an int parameter sets an int or double field. std::logic_error when the .cfg lacks it or
+// its type does not fit: a field list naming the wrong parameter, a bug.
+template <typename T, typename ConfigT>
+T configValue(const ConfigT& config, const std::string& name) {
+  for (const auto& description : ConfigT::__getParamDescriptions__()) {
+    if (description->name != name) continue;
+    boost::any value;
+    description->getValue(config, value);
+    if constexpr (std::is_same_v<T, bool> || std::is_same_v<T, std::string>) {
+      if (const T* exact = boost::any_cast<T>(&value)) return *exact;
+    } else if constexpr (std::is_arithmetic_v<T>) {
+      if (const T* exact = boost::any_cast<T>(&value)) return *exact;
+      if (const int* whole = boost::any_cast<int>(&value)) return static_cast<T>(*whole);
+    }
+    throw std::logic_error("the .cfg parameter " + name + " (" + description->type +
+                           ") cannot set a field of this type");
+  }
+  throw std::logic_error(name + " is not a parameter of the .cfg");
+}
+
+// Sets each of `core`'s listed fields (Struct::fields(), config_fields.h) that a .cfg parameter
+// sets from `config`; the rest keep their values.
+template <typename Struct, typename ConfigT>
+void assignFromConfig(Struct& core, const ConfigT& config) {
+  forEachField<Struct>([&](const auto& field) {
+    using T = std::decay_t<decltype(core.*field.member)>;
+    if (field.cfg_param == nullptr) return;
+    core.*field.member = configValue<T>(config, field.cfg_param);
+    if constexpr (std::is_floating_point_v<T>) core.*field.member *= field.cfg_scale;
+  });
 }
 
 }  // namespace follow_bot
