@@ -622,7 +622,7 @@ def bad_camera():
          "width_m must be > 0, got 0"),
         (lambda: core.ParkingServoConfig(gain=-1.0), "gain must be > 0, got -1"),
         (lambda: ic_core.OverlayConfig(radius_px=0), "radius_px must be > 0, got 0"),
-        (lambda: ic_core.MatchOptions(ratio=1.5), "ratio must be in (0, 1]"),
+        (lambda: ic_core.MatchOptions(ratio=1.5), "ratio must be in (0, 1], got 1.5"),
         (lambda: ic_core.TurningCamera(fx=0.0), "fx must be > 0"),
     ],
 )  # fmt: skip
