@@ -53,8 +53,8 @@ struct PdConfig {
   double look_ahead_weight = FollowerDefaults::look_ahead_weight;
   // linear = max_linear * (1 - taper |e| - curvature_taper |e_ahead - e_near|), clamped to
   // [min_linear, max_linear]; the curvature term needs a found look-ahead band.
-  double taper = FollowerDefaults::taper;  // speed fraction lost per unit |e|
-  double curvature_taper = 0.5;            // speed fraction lost per unit |e_ahead - e_near|
+  double taper = FollowerDefaults::taper;                      // speed fraction lost per unit |e|
+  double curvature_taper = FollowerDefaults::curvature_taper;  // per unit |e_ahead - e_near|
 
   static constexpr auto fields() {
     using C = PdConfig;
@@ -63,7 +63,7 @@ struct PdConfig {
                            field("max_derivative_dt", &C::max_derivative_dt, positive()),
                            cfgField("look_ahead_weight", &C::look_ahead_weight, inRange(0.0, 1.0)),
                            cfgField("taper", &C::taper, atLeast(0.0)),
-                           field("curvature_taper", &C::curvature_taper, atLeast(0.0)));
+                           cfgField("curvature_taper", &C::curvature_taper, atLeast(0.0)));
   }
 };
 
