@@ -427,3 +427,25 @@ def test_fit_colours_finds_the_beacons_in_a_glare(tmp_path):
         capture_output=True, text=True, timeout=60, check=True,
     )  # fmt: skip
     assert yaml.safe_load(dump.stdout)["/beacon_chaser/s_min"] == params["s_min"]
+
+
+def test_params_reach_the_cores_as_the_nodelets_map_them(tmp_path):
+    # Values the defaults do not have, under the .cfg's names (cfg/Follower.cfg).
+    params = {"mode": "pd", "max_linear": 0.45, "kp": 2.5, "curvature_taper": 0.9,
+              "search_rate": 0.4, "heading_gain": 12.0, "command_latency": 0.2,
+              "line_width": 0.08, "look_ahead": True, "h_max": 36}  # fmt: skip
+    steering = bag_doctor.steering_config_with(core, params)
+    assert steering.mode == core.SteeringMode.pd
+    assert (steering.max_linear, steering.pd.kp, steering.pd.curvature_taper) == (0.45, 2.5, 0.9)
+    assert (steering.search.search_rate, steering.path.heading_gain) == (0.4, 12.0)
+    assert steering.path.command_latency == 0.2
+    detector = bag_doctor.detector_config_with(core, params)
+    assert (detector.line_width_m, detector.look_ahead_enabled, detector.upper.h) == (0.08, True, 36)
+    # A parameter in degrees sets a field in radians.
+    servo = bag_doctor.set_from_params(core.ParkingServoConfig(), {"max_bearing_deg": 10.0})
+    assert servo.max_bearing_rad == pytest.approx(math.radians(10.0), abs=1e-15)
+    # A name no replay applies is refused, naming it.
+    path = tmp_path / "params.yaml"
+    path.write_text("kp: 2.0\nestimate_latency: false\nstandoff: 0.5\n")
+    with pytest.raises(ValueError, match="estimate_latency, standoff"):
+        bag_doctor.load_params(path, "follower")

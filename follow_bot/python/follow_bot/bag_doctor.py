@@ -748,19 +748,38 @@ def fit_beacon_colours(samples, centres) -> dict | None:
     return {"sensitivity": sensitivity, "s_min": s_min, "v_min": v_min}
 
 
-DETECTOR_PARAMS = ("h_min", "h_max", "s_min", "s_max", "v_min", "v_max", "band_distance",
-                   "band_rows", "look_ahead", "look_ahead_distance", "min_pixels",
-                   "floor_margin", "floor_mads", "line_width", "line_width_factor",
-                   "blob_saturation_fraction")  # fmt: skip
-STEERING_PARAMS = ("mode", "max_linear", "min_linear", "max_angular")
-PD_PARAMS = ("kp", "kd", "taper", "look_ahead_weight")
-PATH_PARAMS = ("heading_gain", "lateral_gain")
+# The follower's ~params its nodelet maps itself (the colour box and the bands); every other one
+# sets a field that a core's CFG_FIELDS lists (the C++ field lists the nodelets expand too).
+BOX_AND_BAND_PARAMS = ("h_min", "h_max", "s_min", "s_max", "v_min", "v_max", "band_distance",
+                       "band_rows", "look_ahead_distance")  # fmt: skip
 COLOUR_PARAMS = ("sensitivity", "s_min", "v_min")  # the beacon chaser's, every colour's
-BEACON_PARAMS = (*COLOUR_PARAMS, "min_area", "roundness_tolerance")
-KNOWN_PARAMS = {
-    "follower": {*DETECTOR_PARAMS, *STEERING_PARAMS, *PD_PARAMS, *PATH_PARAMS, "search_rate"},
-    "beacons": set(BEACON_PARAMS),
-}
+FITTED_BEHAVIOURS = ("follower", "beacons")
+
+
+def steering_configs(core):
+    return (core.SteeringConfig, core.PdConfig, core.LineSearchConfig, core.PathConfig)
+
+
+def cfg_params(*config_types) -> set:
+    """The ~params that set fields of these core config classes."""
+    return {param for config_type in config_types for _, param, _ in config_type.CFG_FIELDS}
+
+
+def known_params(core, behaviour) -> set:
+    """The ~params a replay of `behaviour` applies."""
+    if behaviour == "follower":
+        return {*BOX_AND_BAND_PARAMS, "mode",
+                *cfg_params(core.LineDetectorConfig, *steering_configs(core))}  # fmt: skip
+    return {*COLOUR_PARAMS, "roundness_tolerance", *cfg_params(core.ColourBlobConfig)}
+
+
+def set_from_params(config, params: dict):
+    """Sets each field of `config` that a ~param in `params` sets, scaled to its unit."""
+    for field, param, scale in type(config).CFG_FIELDS:
+        if param in params:
+            value = params[param]
+            setattr(config, field, value if scale == 1.0 else value * scale)
+    return config
 
 
 def detector_config_with(core, params: dict):
@@ -779,16 +798,7 @@ def detector_config_with(core, params: dict):
     config.band = core.BandConfig(distance_m=distance, rows=rows)
     ahead = params.get("look_ahead_distance", config.look_ahead.distance_m)
     config.look_ahead = core.BandConfig(distance_m=ahead, rows=rows)
-    config.look_ahead_enabled = params.get("look_ahead", config.look_ahead_enabled)
-    config.min_pixels = params.get("min_pixels", config.min_pixels)
-    config.floor_margin = params.get("floor_margin", config.floor_margin)
-    config.floor_mads = params.get("floor_mads", config.floor_mads)
-    config.line_width_m = params.get("line_width", config.line_width_m)
-    config.line_width_factor = params.get("line_width_factor", config.line_width_factor)
-    config.blob_saturation_fraction = params.get(
-        "blob_saturation_fraction", config.blob_saturation_fraction
-    )
-    return config
+    return set_from_params(config, params)
 
 
 def beacon_config_with(core, params: dict):
@@ -800,27 +810,18 @@ def beacon_config_with(core, params: dict):
         for name in COLOUR_PARAMS:
             setattr(spec, name, params.get(name, getattr(spec, name)))
     config.colours = colours
-    config.min_area = params.get("min_area", config.min_area)
     config.roundness_tolerance = params.get("roundness_tolerance", config.roundness_tolerance)
-    return config
+    return set_from_params(config, params)
 
 
 def steering_config_with(core, params: dict):
     """core.SteeringConfig of follower ~params, as the follower nodelet maps them."""
-    config = core.SteeringConfig()
-    for name in STEERING_PARAMS:
-        if name in params:
-            setattr(config, name, params[name])
-    pd, path, search = config.pd, config.path, config.search
-    for name in PD_PARAMS:
-        if name in params:
-            setattr(pd, name, params[name])
-    for name in PATH_PARAMS:
-        if name in params:
-            setattr(path, name, params[name])
-    if "search_rate" in params:
-        search.search_rate = params["search_rate"]
-    config.pd, config.path, config.search = pd, path, search
+    config = set_from_params(core.SteeringConfig(), params)
+    if "mode" in params:
+        config.mode = params["mode"]
+    config.pd = set_from_params(config.pd, params)
+    config.search = set_from_params(config.search, params)
+    config.path = set_from_params(config.path, params)
     return config
 
 
@@ -828,10 +829,12 @@ def load_params(path, behaviour="follower") -> dict:
     """The behaviour's ~params in a YAML file (unknown names: ValueError naming them)."""
     import yaml
 
+    from follow_bot import core
+
     params = yaml.safe_load(Path(path).read_text()) or {}
-    if behaviour not in KNOWN_PARAMS:
+    if behaviour not in FITTED_BEHAVIOURS:
         raise ValueError(f"--params: the {behaviour} replay takes none")
-    unknown = sorted(set(params) - KNOWN_PARAMS[behaviour])
+    unknown = sorted(set(params) - known_params(core, behaviour))
     if unknown:
         raise ValueError(f"{path}: not {behaviour} parameters: {', '.join(unknown)}")
     return params
@@ -937,7 +940,7 @@ def inspect(bag_path, out, behaviour="follower", fit_colours=False, args=None) -
         topics = pick_topics(bag, args.image_topic, args.cmd_vel_topic)
     mounting, mounting_source = bag_mounting(bag_path, topics, args)
     params = load_params(args.params, behaviour) if args.params else {}
-    if fit_colours and behaviour not in KNOWN_PARAMS:
+    if fit_colours and behaviour not in FITTED_BEHAVIOURS:
         raise ValueError("--fit-colours fits the follower's line band or the beacons' colours")
     sample_every = max(1, math.ceil(topics.frames / FIT_SAMPLES)) if fit_colours else 0
     first, replayed = replay(

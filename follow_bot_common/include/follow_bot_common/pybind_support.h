@@ -110,11 +110,19 @@ inline std::string reprFields(const py::object& self) {
 template <class T>
 using Validator = std::string (*)(const T&);
 
-// A read-write attribute for each field T::fields() lists (config_fields.h), named as in C++.
+// A read-write attribute for each field T::fields() lists (config_fields.h), named as in C++,
+// and the class attribute CFG_FIELDS: (field, .cfg parameter, scale) for each field a .cfg
+// parameter sets, so Python maps ~params to a core's config as the nodelets do.
 template <class T>
 void bindFields(py::class_<T>& cls) {
-  follow_bot::forEachField<T>(
-      [&](const auto& field) { cls.def_readwrite(field.name, field.member); });
+  py::list cfg_fields;
+  follow_bot::forEachField<T>([&](const auto& field) {
+    cls.def_readwrite(field.name, field.member);
+    if (field.cfg_param != nullptr) {
+      cfg_fields.append(py::make_tuple(field.name, field.cfg_param, field.cfg_scale));
+    }
+  });
+  cls.attr("CFG_FIELDS") = py::tuple(cfg_fields);
 }
 
 // A keyword constructor Config(field=value, ...): every other field keeps its C++ default, an
