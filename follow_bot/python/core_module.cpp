@@ -355,14 +355,13 @@ void bindGeometry(py::module_& m) {
 
 void bindBeaconController(py::module_& m) {
   py::enum_<BeaconShape> shape(m, "BeaconShape");
-  shape.value("sphere", BeaconShape::kSphere).value("box", BeaconShape::kBox);
-  defStringInit(shape, &parseBeaconShape);
+  defEnumNames(shape, kBeaconShapeNames);
 
   py::class_<BeaconObject> object(
       m, "BeaconObject",
       "size_m: a sphere's radius, a box's width facing the camera; depth_m: a box's footprint "
       "behind that face.");
-  defEnumField(object, "shape", &BeaconObject::shape, &parseBeaconShape);
+  defEnumField(object, "shape", &BeaconObject::shape, kBeaconShapeNames);
   object.def_readwrite("size_m", &BeaconObject::size_m)
       .def_readwrite("depth_m", &BeaconObject::depth_m);
   defKeywordInit(object, static_cast<Validator<BeaconObject>>(&validate));
@@ -376,21 +375,14 @@ void bindBeaconController(py::module_& m) {
         "object"_a);
 
   py::enum_<BeaconMode> mode(m, "BeaconMode");
-  mode.value("follow_green_stop_red", BeaconMode::kFollowGreenStopRed)
-      .value("approach", BeaconMode::kApproach);
-  defStringInit(mode, &parseBeaconMode);
+  defEnumNames(mode, kBeaconModeNames);
 
-  py::enum_<BeaconState>(m, "BeaconState")
-      .value(toString(BeaconState::kSearching), BeaconState::kSearching)
-      .value(toString(BeaconState::kApproaching), BeaconState::kApproaching)
-      .value(toString(BeaconState::kHolding), BeaconState::kHolding)
-      .value(toString(BeaconState::kStoppedByRed), BeaconState::kStoppedByRed)
-      .value(toString(BeaconState::kLost), BeaconState::kLost)
-      .value(toString(BeaconState::kArrived), BeaconState::kArrived);
+  py::enum_<BeaconState> state(m, "BeaconState");
+  defEnumNames(state, kBeaconStateNames);
 
   using Config = BeaconControllerConfig;
   py::class_<Config> config(m, "BeaconControllerConfig");
-  defEnumField(config, "mode", &Config::mode, &parseBeaconMode);
+  defEnumField(config, "mode", &Config::mode, kBeaconModeNames);
   bindFields(config);
   config.def_readwrite("target", &Config::target).def_readwrite("camera", &Config::camera);
   defKeywordInit(config, static_cast<Validator<Config>>(&validate));
@@ -472,16 +464,10 @@ void bindTagDetector(py::module_& m) {
 
 void bindSteering(py::module_& m) {
   py::enum_<SteeringMode> mode(m, "SteeringMode");
-  mode.value("lecture", SteeringMode::kLecture)
-      .value("pd", SteeringMode::kPD)
-      .value("path", SteeringMode::kPath);
-  defStringInit(mode, &parseSteeringMode);
+  defEnumNames(mode, kSteeringModeNames);
 
-  py::enum_<LineState>(m, "LineState")
-      .value(toString(LineState::kFollowing), LineState::kFollowing)
-      .value(toString(LineState::kLost), LineState::kLost)
-      .value(toString(LineState::kSearching), LineState::kSearching)
-      .value(toString(LineState::kGaveUp), LineState::kGaveUp);
+  py::enum_<LineState> line_state(m, "LineState");
+  defEnumNames(line_state, kLineStateNames);
 
   py::class_<PdConfig> pd(m, "PdConfig", "pd's steering and speed taper.");
   bindFields(pd);
@@ -498,7 +484,7 @@ void bindSteering(py::module_& m) {
 
   py::class_<SteeringConfig> config(m, "SteeringConfig",
                                     "One configuration of the three laws, one set of limits.");
-  defEnumField(config, "mode", &SteeringConfig::mode, &parseSteeringMode);
+  defEnumField(config, "mode", &SteeringConfig::mode, kSteeringModeNames);
   bindFields(config);
   config.def_readwrite("pd", &SteeringConfig::pd)
       .def_readwrite("search", &SteeringConfig::search)
@@ -601,12 +587,8 @@ void bindSignDetector(py::module_& m) {
 }
 
 void bindParkingServo(py::module_& m) {
-  py::enum_<ParkingState>(m, "ParkingState")
-      .value(toString(ParkingState::kSearching), ParkingState::kSearching)
-      .value(toString(ParkingState::kApproaching), ParkingState::kApproaching)
-      .value(toString(ParkingState::kAligning), ParkingState::kAligning)
-      .value(toString(ParkingState::kParked), ParkingState::kParked)
-      .value(toString(ParkingState::kLost), ParkingState::kLost);
+  py::enum_<ParkingState> parking_state(m, "ParkingState");
+  defEnumNames(parking_state, kParkingStateNames);
 
   using Config = ParkingServoConfig;
   py::class_<Config> config(m, "ParkingServoConfig");

@@ -30,12 +30,6 @@ cv::Mat greyOrBgrView(const py::handle& image) {
   return matView(image, grey ? 1 : 3);
 }
 
-std::optional<Detector> parseDetectorName(const std::string& name) {
-  Detector detector{};
-  if (!parseDetector(name, detector)) return std::nullopt;
-  return detector;
-}
-
 // Raises ValueError with the validate() message of a config changed after construction.
 template <class T>
 void check(const T& config) {
@@ -61,13 +55,10 @@ void bindOverlay(py::module_& m) {
 
 void bindMatching(py::module_& m) {
   py::enum_<Detector> detector(m, "Detector");
-  detector.value("orb", Detector::kOrb)
-      .value("sift", Detector::kSift)
-      .value("akaze", Detector::kAkaze);
-  defStringInit(detector, &parseDetectorName);
+  defEnumNames(detector, kDetectorNames);
 
   py::class_<MatchOptions> options(m, "MatchOptions");
-  defEnumField(options, "detector", &MatchOptions::detector, &parseDetectorName);
+  defEnumField(options, "detector", &MatchOptions::detector, kDetectorNames);
   bindFields(options);
   defKeywordInit(options, static_cast<Validator<MatchOptions>>(&validate));
 

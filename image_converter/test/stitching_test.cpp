@@ -238,12 +238,10 @@ TEST(MatchOptions, RejectsUnusableValues) {
   options = MatchOptions();
   options.ratio = 1.5;
   EXPECT_NE(validate(options).find("ratio"), std::string::npos);
-  Detector detector;
-  EXPECT_TRUE(parseDetector("sift", detector));
-  EXPECT_EQ(detector, Detector::kSift);
-  EXPECT_TRUE(parseDetector("akaze", detector));
-  EXPECT_EQ(detector, Detector::kAkaze);
-  EXPECT_FALSE(parseDetector("surf", detector));
+  EXPECT_EQ(parseDetector("sift"), Detector::kSift);
+  EXPECT_EQ(parseDetector("akaze"), Detector::kAkaze);
+  EXPECT_EQ(parseDetector("surf"), std::nullopt);
+  EXPECT_EQ(detectorName(Detector::kOrb), "orb");
 }
 
 // A plane receding to the right, B's horizon 625 px right of its left edge: B's left edge is

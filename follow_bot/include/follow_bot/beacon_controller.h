@@ -10,6 +10,7 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -17,6 +18,7 @@
 #include "follow_bot/BeaconChaserDefaults.h"
 #include "follow_bot/colour_blobs.h"
 #include "follow_bot_common/config_fields.h"
+#include "follow_bot_common/enum_names.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/velocity_limiter.h"
 
@@ -29,9 +31,12 @@ enum class BeaconShape {
   kBox,     // a box standing on the floor, one vertical face toward the camera
 };
 
-// "sphere" / "box", and back.
-std::optional<BeaconShape> parseBeaconShape(const std::string& name);
-const char* toString(BeaconShape shape);
+inline constexpr EnumName<BeaconShape> kBeaconShapeNames[] = {{BeaconShape::kSphere, "sphere"},
+                                                              {BeaconShape::kBox, "box"}};
+inline std::optional<BeaconShape> parseBeaconShape(std::string_view name) {
+  return valueIn(kBeaconShapeNames, name);
+}
+inline const char* toString(BeaconShape shape) { return nameIn(kBeaconShapeNames, shape); }
 
 struct BeaconObject {
   BeaconShape shape = BeaconShape::kBox;
@@ -161,9 +166,13 @@ enum class BeaconMode {
   kApproach,
 };
 
-// "follow_green_stop_red" / "approach" (the spelling of ROS parameters), and back.
-std::optional<BeaconMode> parseBeaconMode(const std::string& name);
-const char* toString(BeaconMode mode);
+inline constexpr EnumName<BeaconMode> kBeaconModeNames[] = {
+    {BeaconMode::kFollowGreenStopRed, "follow_green_stop_red"},
+    {BeaconMode::kApproach, "approach"}};
+inline std::optional<BeaconMode> parseBeaconMode(std::string_view name) {
+  return valueIn(kBeaconModeNames, name);
+}
+inline const char* toString(BeaconMode mode) { return nameIn(kBeaconModeNames, mode); }
 
 enum class BeaconState {
   kSearching,     // the target is not in view: spin in place toward where it was last seen
@@ -173,7 +182,11 @@ enum class BeaconState {
   kLost,          // approach mode: the target just vanished, stand still for lost_hold s
   kArrived,       // approach mode: at stop_distance and facing the target, stand still
 };
-const char* toString(BeaconState state);
+inline constexpr EnumName<BeaconState> kBeaconStateNames[] = {
+    {BeaconState::kSearching, "searching"}, {BeaconState::kApproaching, "approaching"},
+    {BeaconState::kHolding, "holding"},     {BeaconState::kStoppedByRed, "stopped_by_red"},
+    {BeaconState::kLost, "lost"},           {BeaconState::kArrived, "arrived"}};
+inline const char* toString(BeaconState state) { return nameIn(kBeaconStateNames, state); }
 
 // Defaults of the parameters cfg/BeaconChaser.cfg declares: BeaconChaserDefaults (generated).
 struct BeaconControllerConfig {

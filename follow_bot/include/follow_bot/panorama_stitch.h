@@ -9,6 +9,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot_common/enum_names.h"
 #include "follow_bot_common/ground_projection.h"
 #include "image_converter/feature_matching.h"
 
@@ -17,8 +18,14 @@ namespace follow_bot {
 // auto: features, else the odometry yaws; features: cv::Stitcher only; rotation: yaws only.
 enum class StitchMethod { kAuto, kFeatures, kRotation };
 
+inline constexpr EnumName<StitchMethod> kStitchMethodNames[] = {
+    {StitchMethod::kAuto, "auto"},
+    {StitchMethod::kFeatures, "features"},
+    {StitchMethod::kRotation, "rotation"}};
 // "auto", "features" or "rotation"; empty for any other name.
-std::optional<StitchMethod> parseStitchMethod(const std::string& name);
+inline std::optional<StitchMethod> parseStitchMethod(std::string_view name) {
+  return valueIn(kStitchMethodNames, name);
+}
 
 struct CaptureStitch {
   cv::Mat panorama;     // empty when stitching failed

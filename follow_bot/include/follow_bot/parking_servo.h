@@ -31,13 +31,20 @@
 #include "follow_bot/ParkerDefaults.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot_common/config_fields.h"
+#include "follow_bot_common/enum_names.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
 
 enum class ParkingState { kSearching, kApproaching, kAligning, kParked, kLost };
-const char* toString(ParkingState state);
+inline constexpr EnumName<ParkingState> kParkingStateNames[] = {
+    {ParkingState::kSearching, "searching"},
+    {ParkingState::kApproaching, "approaching"},
+    {ParkingState::kAligning, "aligning"},
+    {ParkingState::kParked, "parked"},
+    {ParkingState::kLost, "lost"}};
+inline const char* toString(ParkingState state) { return nameIn(kParkingStateNames, state); }
 
 struct ParkingServoConfig {
   using D = ParkerDefaults;  // cfg/Parker.cfg's defaults (generated)

@@ -11,9 +11,11 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "follow_bot/line_detector.h"
 #include "follow_bot_common/config_fields.h"
+#include "follow_bot_common/enum_names.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/velocity_limiter.h"
 
@@ -31,9 +33,13 @@ enum class SteeringMode {
   kPath,
 };
 
-// "lecture" / "pd" / "path" (the values of the follower's ~mode), and back.
-std::optional<SteeringMode> parseSteeringMode(const std::string& name);
-const char* toString(SteeringMode mode);
+// The values of the follower's ~mode.
+inline constexpr EnumName<SteeringMode> kSteeringModeNames[] = {
+    {SteeringMode::kLecture, "lecture"}, {SteeringMode::kPD, "pd"}, {SteeringMode::kPath, "path"}};
+inline std::optional<SteeringMode> parseSteeringMode(std::string_view name) {
+  return valueIn(kSteeringModeNames, name);
+}
+inline const char* toString(SteeringMode mode) { return nameIn(kSteeringModeNames, mode); }
 
 enum class LineState {
   kFollowing,  // the line is seen
@@ -41,7 +47,11 @@ enum class LineState {
   kSearching,  // spin in place toward that side
   kGaveUp,     // stopped; any sighting resumes following
 };
-const char* toString(LineState state);
+inline constexpr EnumName<LineState> kLineStateNames[] = {{LineState::kFollowing, "following"},
+                                                          {LineState::kLost, "lost"},
+                                                          {LineState::kSearching, "searching"},
+                                                          {LineState::kGaveUp, "gave_up"}};
+inline const char* toString(LineState state) { return nameIn(kLineStateNames, state); }
 
 // pd's steering and speed taper.
 struct PdConfig {

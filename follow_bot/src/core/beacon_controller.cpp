@@ -33,22 +33,6 @@ const ColourBlob* seen(const BlobResult& blobs, const std::string& name) {
 
 }  // namespace
 
-std::optional<BeaconShape> parseBeaconShape(const std::string& name) {
-  if (name == "sphere") return BeaconShape::kSphere;
-  if (name == "box") return BeaconShape::kBox;
-  return std::nullopt;
-}
-
-const char* toString(BeaconShape shape) {
-  switch (shape) {
-    case BeaconShape::kSphere:
-      return "sphere";
-    case BeaconShape::kBox:
-      return "box";
-  }
-  return "unknown";
-}
-
 std::string validate(const BeaconObject& object) {
   for (const std::string& error :
        {requirePositive("size_m", object.size_m), requirePositive("depth_m", object.depth_m)}) {
@@ -289,40 +273,6 @@ std::optional<cv::Point2d> boxCentre(const BoxFace& face, bool cut_left, bool cu
   const cv::Point2d centre = *middle + 0.5 * object.depth_m * face.behind();
   if (!isFinite(centre)) return std::nullopt;
   return centre;
-}
-
-std::optional<BeaconMode> parseBeaconMode(const std::string& name) {
-  if (name == "follow_green_stop_red") return BeaconMode::kFollowGreenStopRed;
-  if (name == "approach") return BeaconMode::kApproach;
-  return std::nullopt;
-}
-
-const char* toString(BeaconMode mode) {
-  switch (mode) {
-    case BeaconMode::kFollowGreenStopRed:
-      return "follow_green_stop_red";
-    case BeaconMode::kApproach:
-      return "approach";
-  }
-  return "unknown";
-}
-
-const char* toString(BeaconState state) {
-  switch (state) {
-    case BeaconState::kSearching:
-      return "searching";
-    case BeaconState::kApproaching:
-      return "approaching";
-    case BeaconState::kHolding:
-      return "holding";
-    case BeaconState::kStoppedByRed:
-      return "stopped_by_red";
-    case BeaconState::kLost:
-      return "lost";
-    case BeaconState::kArrived:
-      return "arrived";
-  }
-  return "unknown";
 }
 
 std::string validate(const BeaconControllerConfig& c) {

@@ -24,13 +24,6 @@ std::string checkWidth(int width, const std::vector<cv::Mat>& frames,
 
 }  // namespace
 
-std::optional<StitchMethod> parseStitchMethod(const std::string& name) {
-  if (name == "auto") return StitchMethod::kAuto;
-  if (name == "features") return StitchMethod::kFeatures;
-  if (name == "rotation") return StitchMethod::kRotation;
-  return std::nullopt;
-}
-
 CaptureStitch stitchCapture(const std::vector<cv::Mat>& frames, const std::vector<double>& yaws,
                             const CameraGeometry& camera,
                             const image_converter::MatchOptions& options, StitchMethod method) {

@@ -46,22 +46,6 @@ double bearingInView(const MarkerObservation& marker, const CameraGeometry& came
 
 }  // namespace
 
-const char* toString(ParkingState state) {
-  switch (state) {
-    case ParkingState::kSearching:
-      return "searching";
-    case ParkingState::kApproaching:
-      return "approaching";
-    case ParkingState::kAligning:
-      return "aligning";
-    case ParkingState::kParked:
-      return "parked";
-    case ParkingState::kLost:
-      return "lost";
-  }
-  return "unknown";
-}
-
 std::string validate(const ParkingServoConfig& config) {
   for (const std::string& error : {
            checkFields(config),

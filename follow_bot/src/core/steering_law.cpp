@@ -19,39 +19,6 @@ std::string requireAtMostMaxLinear(const char* name, double value, double max_li
 
 }  // namespace
 
-std::optional<SteeringMode> parseSteeringMode(const std::string& name) {
-  for (SteeringMode mode : {SteeringMode::kLecture, SteeringMode::kPD, SteeringMode::kPath}) {
-    if (name == toString(mode)) return mode;
-  }
-  return std::nullopt;
-}
-
-const char* toString(SteeringMode mode) {
-  switch (mode) {
-    case SteeringMode::kLecture:
-      return "lecture";
-    case SteeringMode::kPD:
-      return "pd";
-    case SteeringMode::kPath:
-      return "path";
-  }
-  return "unknown";
-}
-
-const char* toString(LineState state) {
-  switch (state) {
-    case LineState::kFollowing:
-      return "following";
-    case LineState::kLost:
-      return "lost";
-    case LineState::kSearching:
-      return "searching";
-    case LineState::kGaveUp:
-      return "gave_up";
-  }
-  return "unknown";
-}
-
 std::string validate(const SteeringConfig& c) {
   for (const std::string& error : {
            checkFields(c),

@@ -152,14 +152,8 @@ PanoramaSessionConfig panoramaSettings(const PanoramaConfig& cfg,
   PanoramaSessionConfig settings;
   assignFromConfig(settings.capture, cfg);
 
-  settings.match.detector = parseChoice(
-      "detector", matching.detector,
-      [](const std::string& name) {
-        image_converter::Detector detector;
-        return image_converter::parseDetector(name, detector) ? std::optional(detector)
-                                                              : std::nullopt;
-      },
-      "orb or sift");
+  settings.match.detector =
+      parseChoice("detector", matching.detector, image_converter::parseDetector, "orb or sift");
   assignFromConfig(settings.match, matching);
   settings.method = parseChoice("stitch_method", cfg.stitch_method, parseStitchMethod,
                                 "auto, features or rotation");

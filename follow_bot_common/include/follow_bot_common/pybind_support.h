@@ -27,6 +27,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot_common/config_fields.h"
+#include "follow_bot_common/enum_names.h"
 
 namespace pybind_support {
 
@@ -178,30 +179,34 @@ py::array_t<double> matrixArray(const cv::Matx<double, Rows, Cols>& m) {
   return out;
 }
 
-// An enum whose values are the C++ names' ROS spellings; E("name") parses one.
-template <class E>
-void defStringInit(py::enum_<E>& cls, std::optional<E> (*parse)(const std::string&)) {
-  cls.def(py::init([parse](const std::string& name) {
-    const std::optional<E> value = parse(name);
+// The enum's values under the names of its table (enum_names.h: the ~params' and ~status
+// topics' spellings); E("name") parses one.
+template <class E, std::size_t N>
+void defEnumNames(py::enum_<E>& cls, const follow_bot::EnumName<E> (&names)[N]) {
+  for (const follow_bot::EnumName<E>& entry : names) cls.value(entry.name, entry.value);
+  const follow_bot::EnumName<E>(*table)[N] = &names;  // a static table: outlives the module
+  cls.def(py::init([table](const std::string& name) {
+    const std::optional<E> value = follow_bot::valueIn(*table, name);
     if (!value) throw py::value_error("unknown value '" + name + "'");
     return *value;
   }));
 }
 
-// A config field of enum type E that also takes the value's name: a str is parsed (ValueError
-// naming the field for an unknown one), anything else must be an E.
-template <class Config, class E>
+// A config field of enum type E that also takes the value's name (from its table): a str is
+// parsed (ValueError naming the field for an unknown one), anything else must be an E.
+template <class Config, class E, std::size_t N>
 void defEnumField(py::class_<Config>& cls, const char* name, E Config::*field,
-                  std::optional<E> (*parse)(const std::string&)) {
+                  const follow_bot::EnumName<E> (&names)[N]) {
   const std::string field_name = name;
+  const follow_bot::EnumName<E>(*table)[N] = &names;  // a static table: outlives the module
   cls.def_property(
       name, [field](const Config& config) { return config.*field; },
-      [field, parse, field_name](Config& config, const py::object& value) {
+      [field, table, field_name](Config& config, const py::object& value) {
         if (!py::isinstance<py::str>(value)) {
           config.*field = value.cast<E>();
           return;
         }
-        const std::optional<E> parsed = parse(value.cast<std::string>());
+        const std::optional<E> parsed = follow_bot::valueIn(*table, value.cast<std::string>());
         if (!parsed) {
           throw py::value_error(field_name + ": unknown value '" + value.cast<std::string>() + "'");
         }

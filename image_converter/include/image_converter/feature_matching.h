@@ -11,21 +11,26 @@
 #include <opencv2/features2d.hpp>
 
 #include "follow_bot_common/config_fields.h"
+#include "follow_bot_common/enum_names.h"
 #include "image_converter/MatchingDefaults.h"
 
 namespace image_converter {
 
 enum class Detector { kOrb, kSift, kAkaze };
+inline constexpr follow_bot::EnumName<Detector> kDetectorNames[] = {
+    {Detector::kOrb, "orb"}, {Detector::kSift, "sift"}, {Detector::kAkaze, "akaze"}};
 
-// "orb", "sift" or "akaze" (lower case); false for anything else.
-bool parseDetector(const std::string& name, Detector& detector);
-std::string detectorName(Detector detector);
-// At compile time: "orb", "sift" or "akaze". Any other name throws, which in a constant expression
-// is a compile error, so a new name in cfg/Matching.cfg cannot silently mean one of these.
+// "orb", "sift" or "akaze" (lower case); nothing for anything else.
+inline std::optional<Detector> parseDetector(std::string_view name) {
+  return follow_bot::valueIn(kDetectorNames, name);
+}
+inline std::string detectorName(Detector detector) {
+  return follow_bot::nameIn(kDetectorNames, detector);
+}
+// At compile time: any other name throws, which in a constant expression is a compile error, so
+// a new name in cfg/Matching.cfg cannot silently mean one of these.
 constexpr Detector detectorNamed(std::string_view name) {
-  if (name == "orb") return Detector::kOrb;
-  if (name == "sift") return Detector::kSift;
-  if (name == "akaze") return Detector::kAkaze;
+  if (const auto detector = follow_bot::valueIn(kDetectorNames, name)) return *detector;
   throw std::invalid_argument("no such detector");
 }
 // cfg/Matching.cfg's default detector (MatchingDefaults, generated), evaluated at compile time.

@@ -183,28 +183,6 @@ std::string homographyDefect(const cv::Matx33d& homography, const cv::Size& size
   return "";
 }
 
-bool parseDetector(const std::string& name, Detector& detector) {
-  for (const Detector known : {Detector::kOrb, Detector::kSift, Detector::kAkaze}) {
-    if (name == detectorName(known)) {
-      detector = known;
-      return true;
-    }
-  }
-  return false;
-}
-
-std::string detectorName(Detector detector) {
-  switch (detector) {
-    case Detector::kSift:
-      return "sift";
-    case Detector::kAkaze:
-      return "akaze";
-    case Detector::kOrb:
-      break;
-  }
-  return "orb";
-}
-
 std::string validate(const MatchOptions& options) { return follow_bot::checkFields(options); }
 
 std::string checkImage(const cv::Mat& image, const std::string& label, double min_contrast) {

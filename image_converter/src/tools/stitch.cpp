@@ -65,9 +65,9 @@ std::string parse(int argc, char** argv, Arguments& arguments, std::string& usag
     return error.what();
   }
   if (arguments.help) return "";
-  if (!image_converter::parseDetector(detector, arguments.options.detector)) {
-    return "unknown detector '" + detector + "' (use orb, sift or akaze)";
-  }
+  const auto parsed = image_converter::parseDetector(detector);
+  if (!parsed) return "unknown detector '" + detector + "' (use orb, sift or akaze)";
+  arguments.options.detector = *parsed;
   if (arguments.output.empty()) return "no output file (-o pano.png)";
   if (arguments.inputs.size() < 2) {
     return "need at least two input images, got " + std::to_string(arguments.inputs.size());
