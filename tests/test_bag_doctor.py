@@ -440,7 +440,8 @@ def test_params_reach_the_cores_as_the_nodelets_map_them(tmp_path):
     assert (steering.search.search_rate, steering.path.heading_gain) == (0.4, 12.0)
     assert steering.path.command_latency == 0.2
     detector = bag_doctor.detector_config_with(core, params)
-    assert (detector.line_width_m, detector.look_ahead_enabled, detector.upper.h) == (0.08, True, 36)
+    assert detector.line_width_m == 0.08 and detector.look_ahead_enabled
+    assert detector.upper.h == 36
     # A parameter in degrees sets a field in radians.
     servo = bag_doctor.set_from_params(core.ParkingServoConfig(), {"max_bearing_deg": 10.0})
     assert servo.max_bearing_rad == pytest.approx(math.radians(10.0), abs=1e-15)

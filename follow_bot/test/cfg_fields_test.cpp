@@ -75,46 +75,32 @@ void expectSetFrom(const ConfigT& config, const Struct& before = Struct()) {
   });
 }
 
-// The core's own defaults are the .cfg's, and the .cfg's largest values reach every field.
-template <typename Struct, typename ConfigT>
+// Each core's own defaults are the .cfg's, and the .cfg's largest values reach every field.
+template <typename ConfigT, typename... Structs>
 void expectFieldsFollowTheCfg() {
-  {
-    SCOPED_TRACE("the .cfg's defaults give the core's defaults");
-    expectSetFrom<Struct>(ConfigT::__getDefault__());
-  }
-  {
-    SCOPED_TRACE("the .cfg's maxima reach the fields");
-    expectSetFrom<Struct>(ConfigT::__getMax__());
-  }
+  const auto follow = [](auto core) {
+    using Struct = decltype(core);
+    {
+      SCOPED_TRACE("the .cfg's defaults give the core's defaults");
+      expectSetFrom<Struct>(ConfigT::__getDefault__());
+    }
+    {
+      SCOPED_TRACE("the .cfg's maxima reach the fields");
+      expectSetFrom<Struct>(ConfigT::__getMax__());
+    }
+  };
+  (follow(Structs()), ...);
 }
 
-TEST(CfgFields, FollowerCoresFollowFollowerCfg) {
-  expectFieldsFollowTheCfg<LineDetectorConfig, FollowerConfig>();
-  expectFieldsFollowTheCfg<SteeringConfig, FollowerConfig>();
-  expectFieldsFollowTheCfg<PdConfig, FollowerConfig>();
-  expectFieldsFollowTheCfg<LineSearchConfig, FollowerConfig>();
-  expectFieldsFollowTheCfg<PathConfig, FollowerConfig>();
-}
-
-TEST(CfgFields, BeaconCoresFollowBeaconChaserCfg) {
-  expectFieldsFollowTheCfg<BeaconControllerConfig, BeaconChaserConfig>();
-  expectFieldsFollowTheCfg<ColourBlobConfig, BeaconChaserConfig>();
-}
-
-TEST(CfgFields, ParkerCoresFollowParkerCfg) {
-  expectFieldsFollowTheCfg<TagDetectorConfig, ParkerConfig>();
-  expectFieldsFollowTheCfg<ParkingServoConfig, ParkerConfig>();
-  expectFieldsFollowTheCfg<SignDetectorConfig, ParkerConfig>();
-}
-
-TEST(CfgFields, PanoramaCoresFollowPanoramaCfg) {
-  expectFieldsFollowTheCfg<PanoramaCaptureConfig, PanoramaConfig>();
-  expectFieldsFollowTheCfg<PanoramaSessionConfig, PanoramaConfig>();
-}
-
-TEST(CfgFields, ImageConverterCoresFollowItsCfgs) {
-  expectFieldsFollowTheCfg<image_converter::OverlayConfig, image_converter::ImageConverterConfig>();
-  expectFieldsFollowTheCfg<image_converter::MatchOptions, image_converter::MatchingConfig>();
+TEST(CfgFields, EachCoreFollowsItsCfg) {
+  expectFieldsFollowTheCfg<FollowerConfig, LineDetectorConfig, SteeringConfig, PdConfig,
+                           LineSearchConfig, PathConfig>();
+  expectFieldsFollowTheCfg<BeaconChaserConfig, BeaconControllerConfig, ColourBlobConfig>();
+  expectFieldsFollowTheCfg<ParkerConfig, TagDetectorConfig, ParkingServoConfig,
+                           SignDetectorConfig>();
+  expectFieldsFollowTheCfg<PanoramaConfig, PanoramaCaptureConfig, PanoramaSessionConfig>();
+  expectFieldsFollowTheCfg<image_converter::ImageConverterConfig, image_converter::OverlayConfig>();
+  expectFieldsFollowTheCfg<image_converter::MatchingConfig, image_converter::MatchOptions>();
 }
 
 // The .cfg's parameters that the cores' field lists name, with `others`.

@@ -775,10 +775,10 @@ def known_params(core, behaviour) -> set:
 
 def set_from_params(config, params: dict):
     """Sets each field of `config` that a ~param in `params` sets, scaled to its unit."""
-    for field, param, scale in type(config).CFG_FIELDS:
+    for name, param, scale in type(config).CFG_FIELDS:
         if param in params:
             value = params[param]
-            setattr(config, field, value if scale == 1.0 else value * scale)
+            setattr(config, name, value if scale == 1.0 else value * scale)
     return config
 
 

@@ -17,7 +17,7 @@ std::string validate(const PanoramaCaptureConfig& config) {
   if (!(config.step_angle > 0.0 && config.step_angle <= config.total_angle)) {
     return "step_angle must be in (0, total_angle] rad";
   }
-  if (const std::string error = checkFields(config); !error.empty()) return error;
+  if (std::string error = checkFields(config); !error.empty()) return error;
   if (!(config.min_turn_rate > 0.0 && config.min_turn_rate <= config.max_turn_rate)) {
     return "min_turn_rate must be in (0, max_turn_rate] rad/s";
   }
