@@ -756,10 +756,6 @@ COLOUR_PARAMS = ("sensitivity", "s_min", "v_min")  # the beacon chaser's, every 
 FITTED_BEHAVIOURS = ("follower", "beacons")
 
 
-def steering_configs(core):
-    return (core.SteeringConfig, core.PdConfig, core.LineSearchConfig, core.PathConfig)
-
-
 def cfg_params(*config_types) -> set:
     """The ~params that set fields of these core config classes."""
     return {param for config_type in config_types for _, param, _ in config_type.CFG_FIELDS}
@@ -769,7 +765,8 @@ def known_params(core, behaviour) -> set:
     """The ~params a replay of `behaviour` applies."""
     if behaviour == "follower":
         return {*BOX_AND_BAND_PARAMS, "mode",
-                *cfg_params(core.LineDetectorConfig, *steering_configs(core))}  # fmt: skip
+                *cfg_params(core.LineDetectorConfig, core.SteeringConfig, core.PdConfig,
+                            core.LineSearchConfig, core.PathConfig)}  # fmt: skip
     return {*COLOUR_PARAMS, "roundness_tolerance", *cfg_params(core.ColourBlobConfig)}
 
 

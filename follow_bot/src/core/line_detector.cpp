@@ -243,10 +243,9 @@ std::string validate(const LineDetectorConfig& config) {
   if (config.look_ahead_enabled && !(config.look_ahead.distance_m > config.band.distance_m)) {
     message << "look_ahead.distance_m (" << config.look_ahead.distance_m
             << ") must be beyond band.distance_m (" << config.band.distance_m << ")";
-  } else {
-    return checkFields(config);
+    return message.str();
   }
-  return message.str();
+  return checkFields(config);
 }
 
 LineDetector::LineDetector(const LineDetectorConfig& config, const CameraGeometry& camera)
