@@ -5,6 +5,8 @@ import math
 import numpy as np
 import pytest
 
+from follow_bot import core
+
 from harness.camera import Camera
 from harness.geometry import incidence_deg, rotation_angle_deg
 
@@ -24,8 +26,17 @@ def test_intrinsics_and_camera_info():
     assert info["frame_id"] == "camera_rgb_optical_frame"
 
 
+def test_default_mounting_is_the_behaviours():
+    # One default: a world without a camera mounting is seen as the nodes assume it.
+    nodes = core.CameraGeometry()
+    camera = Camera()
+    assert (camera.height_m, camera.pitch, camera.x_offset_m) == (
+        nodes.height_m, nodes.pitch_rad, nodes.x_offset_m)  # fmt: skip
+    assert camera.pitch == pytest.approx(math.radians(20.0))
+
+
 def test_level_camera_projects_hand_computed_pixels():
-    cam = Camera(height_m=0.3)
+    cam = Camera(height_m=0.3, pitch=0.0)
     pts = np.array([[2.0, 0.0, 0.3], [2.0, 0.5, 0.3], [2.0, 0.0, 0.0], [4.0, -1.0, 1.3]])
     uv, depth = cam.project(pts, (0.0, 0.0, 0.0))
     expected = [
@@ -60,7 +71,7 @@ def test_pitched_offset_camera_on_rotated_robot():
 def test_mounting_error_moves_and_turns_the_camera_on_the_base():
     # 5 mm to the left and turned 1 deg left: a point 2 m ahead of the described lens, at lens
     # height, lies 5 mm to the right and 1 deg to the right of the real optical axis.
-    cam = Camera(height_m=0.3, y_offset_error_m=0.005, yaw_error=math.radians(1.0))
+    cam = Camera(height_m=0.3, pitch=0.0, y_offset_error_m=0.005, yaw_error=math.radians(1.0))
     uv, _ = cam.project(np.array([[2.0, 0.0, 0.3]]), (0.0, 0.0, 0.0))
     u, v = uv[0]
     bearing = math.atan2(0.005, 2.0) + math.radians(1.0)  # to the right of the axis
@@ -92,7 +103,7 @@ def test_ground_homography_round_trip():
 
 
 def test_marker_pose_face_on_and_turned():
-    cam = Camera(height_m=0.3)
+    cam = Camera(height_m=0.3, pitch=0.0)
     # Facing the robot 2 m ahead, 0.5 m to its left and 0.5 m above the lens: marker axes are
     # the optical axes (x right, y down, z away), centre at (-0.5, -0.5, 2).
     rot, centre = cam.marker_pose((0.0, 0.0, 0.0), (2.0, 0.5, 0.8, math.pi))

@@ -99,6 +99,7 @@ def test_texture_marker_shows_its_picture(tmp_path):
             "name": "pic",
             "ground": {"size": [6, 6], "metres_per_pixel": 0.02},
             "lighting": {"ambient": 1.0},
+            "camera": {"pitch_deg": 0.0},
             "objects": [
                 {
                     "kind": "texture",

@@ -16,12 +16,16 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from follow_bot import core
 
 from harness.geometry import rot_z
 
 FRAME_ID = "camera_rgb_optical_frame"
 DEFAULT_HFOV = math.radians(60.0)  # Kinect-like horizontal field of view
 PINHOLE = (0.0, 0.0, 0.0, 0.0, 0.0)
+# The one default mounting: the behaviours' own (core.CameraGeometry), so a world that leaves it
+# out is seen by the nodes as they would assume it.
+DEFAULT_MOUNTING = core.CameraGeometry()
 # Named plumb_bob lenses (k1, k2, p1, p2, k3). turtlebot3: the visible barrel distortion of a
 # cheap wide-angle board camera like a TurtleBot3's (straight lines bow ~12 px at the edges).
 LENSES = {"pinhole": PINHOLE, "turtlebot3": (-0.28, 0.07, 0.0, 0.0, 0.0)}
@@ -34,9 +38,9 @@ class Camera:
     width: int = 640
     height: int = 480
     hfov: float = DEFAULT_HFOV
-    height_m: float = 0.30
-    pitch: float = 0.0  # radians, positive tilts the optical axis down towards the floor
-    x_offset_m: float = 0.0  # forward of the base origin
+    height_m: float = DEFAULT_MOUNTING.height_m
+    pitch: float = DEFAULT_MOUNTING.pitch_rad  # radians, positive tilts the axis down
+    x_offset_m: float = DEFAULT_MOUNTING.x_offset_m  # forward of the base origin
     # Where the camera really sits off the mounting above, which is all the robot description
     # (and so the node under test) knows: a mounting error (scenario perturbation).
     y_offset_error_m: float = 0.0  # optical centre this far left of where it is said to be

@@ -275,15 +275,15 @@ def _camera_fields(value: Any, transport: bool) -> Any:
 def _parse_camera(value: Any, where: str) -> Camera:
     allowed = {"width", "height", "hfov_deg", "height_m", "pitch_deg", "x_offset_m", "distortion"}
     f = Fields(_camera_fields(value, transport=False), where, allowed)
-    hfov = f.get("hfov_deg", number(gt=0.0, lt=180.0), 60.0)
-    pitch = f.get("pitch_deg", number(gt=-89.0, lt=89.0), 0.0)
+    hfov = f.get("hfov_deg", number(gt=0.0, lt=180.0), math.degrees(Camera.hfov))
+    pitch = f.get("pitch_deg", number(gt=-89.0, lt=89.0), math.degrees(Camera.pitch))
     return Camera(
-        width=f.get("width", integer(ge=16), 640),
-        height=f.get("height", integer(ge=16), 480),
+        width=f.get("width", integer(ge=16), Camera.width),
+        height=f.get("height", integer(ge=16), Camera.height),
         hfov=math.radians(hfov),
-        height_m=f.get("height_m", _POSITIVE, 0.30),
+        height_m=f.get("height_m", _POSITIVE, Camera.height_m),
         pitch=math.radians(pitch),
-        x_offset_m=f.get("x_offset_m", _ANY, 0.0),
+        x_offset_m=f.get("x_offset_m", _ANY, Camera.x_offset_m),
         distortion=f.get("distortion", parse_distortion, PINHOLE),
     )
 
