@@ -69,7 +69,7 @@ double msOf(const std::function<void()>& work) {
 
 int main() {
   cv::setNumThreads(1);
-  const follow_bot::CameraGeometry camera;
+  const follow_bot_common::CameraGeometry camera;
   const cv::Mat reference = cv::imread(PARKING_SIGN_IMAGE, cv::IMREAD_GRAYSCALE);
   const std::vector<Truth> sequence = makeSequence();
   std::vector<cv::Mat> frames;

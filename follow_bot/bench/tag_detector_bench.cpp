@@ -26,7 +26,7 @@ constexpr int kFrames = 120;
 constexpr int kRounds = 10;          // timed passes over all frames, after one untimed pass
 constexpr double kNoiseSigma = 0.0;  // grey levels
 
-std::vector<cv::Mat> makeFrames(const follow_bot::CameraGeometry& camera) {
+std::vector<cv::Mat> makeFrames(const follow_bot_common::CameraGeometry& camera) {
   cv::RNG rng(7);
   std::vector<cv::Mat> frames;
   for (int i = 0; i < kFrames; ++i) {
@@ -52,22 +52,22 @@ std::vector<cv::Mat> makeFrames(const follow_bot::CameraGeometry& camera) {
 }
 
 // The harness's turtlebot3 lens on `camera` (P = K).
-follow_bot::CameraGeometry throughLens(const follow_bot::CameraGeometry& camera) {
-  follow_bot::CameraGeometry lensed = camera;
+follow_bot_common::CameraGeometry throughLens(const follow_bot_common::CameraGeometry& camera) {
+  follow_bot_common::CameraGeometry lensed = camera;
   const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-  lensed.lens = follow_bot::CameraLens{k, {-0.28, 0.07, 0.0, 0.0, 0.0}, cv::Matx33d::eye()};
+  lensed.lens = follow_bot_common::CameraLens{k, {-0.28, 0.07, 0.0, 0.0, 0.0}, cv::Matx33d::eye()};
   return lensed;
 }
 
 // The pinhole frames as the lens images them: each raw pixel samples the rectified frame where
 // rectifyPixels puts it.
 std::vector<cv::Mat> distort(const std::vector<cv::Mat>& frames,
-                             const follow_bot::CameraGeometry& lensed) {
+                             const follow_bot_common::CameraGeometry& lensed) {
   std::vector<cv::Point2f> raw;
   for (int v = 0; v < frames.front().rows; ++v) {
     for (int u = 0; u < frames.front().cols; ++u) raw.emplace_back(u, v);
   }
-  const std::vector<cv::Point2f> rectified = follow_bot::rectifyPixels(lensed, raw);
+  const std::vector<cv::Point2f> rectified = follow_bot_common::rectifyPixels(lensed, raw);
   cv::Mat map(frames.front().size(), CV_32FC2);
   std::copy(rectified.begin(), rectified.end(), map.begin<cv::Point2f>());
   std::vector<cv::Mat> distorted;
@@ -94,7 +94,7 @@ double msOf(const std::function<void()>& work) {
 
 int main() {
   cv::setNumThreads(1);
-  follow_bot::CameraGeometry camera;
+  follow_bot_common::CameraGeometry camera;
   camera.pitch_rad = 0.0;
   const std::vector<cv::Mat> frames = makeFrames(camera);
   std::vector<vpImage<unsigned char>> visp_frames;
@@ -159,7 +159,7 @@ int main() {
 
   // Raw frames through the turtlebot3 lens (the detector refits each tag on its rectified patch)
   // against the pinhole frames, frame by frame in turn.
-  const follow_bot::CameraGeometry lensed = throughLens(camera);
+  const follow_bot_common::CameraGeometry lensed = throughLens(camera);
   const std::vector<cv::Mat> raw_frames = distort(frames, lensed);
   follow_bot::TagDetector through_lens(config);
   int found_lens = 0;

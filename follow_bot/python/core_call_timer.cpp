@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
   follow_bot::TagDetector tag_detector{follow_bot::TagDetectorConfig()};
   std::unique_ptr<follow_bot::SignDetector> sign_detector;
   if (mode == "--sign") sign_detector = std::make_unique<follow_bot::SignDetector>(sign);
-  const follow_bot::CameraGeometry camera;
+  const follow_bot_common::CameraGeometry camera;
   const auto law = follow_bot::makeSteeringLaw(follow_bot::SteeringConfig(), std::nullopt);
   std::map<const uchar*, follow_bot::LineMeasurement> measurements;  // --steer: per frame
   for (const cv::Mat& frame : frames) measurements[frame.data] = line_detector.detect(frame);

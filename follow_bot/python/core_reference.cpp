@@ -89,7 +89,7 @@ int steer(int argc, char** argv) {
     return 2;
   }
   config.mode = *mode;
-  const auto law = follow_bot::makeSteeringLaw(config, follow_bot::CameraGeometry());
+  const auto law = follow_bot::makeSteeringLaw(config, follow_bot_common::CameraGeometry());
   const follow_bot::LineDetector detector;
   follow_bot::Twist2D applied;
   for (int i = 3; i < argc; ++i) {
@@ -115,7 +115,7 @@ int park(int argc, char** argv) {
   tag.id = std::stoi(argv[3]);
   tag.family = argv[4];
   follow_bot::TagDetector detector(tag);
-  const follow_bot::CameraGeometry camera;
+  const follow_bot_common::CameraGeometry camera;
   follow_bot::ParkingServo servo{follow_bot::ParkingServoConfig()};
   for (int i = 5; i < argc; ++i) {
     const cv::Mat frame = cv::imread(argv[i], cv::IMREAD_GRAYSCALE);

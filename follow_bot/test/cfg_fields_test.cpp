@@ -15,6 +15,7 @@
 #include "follow_bot/ParkerConfig.h"
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
+#include "follow_bot/common.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot/panorama_session.h"
 #include "follow_bot/parking_servo.h"

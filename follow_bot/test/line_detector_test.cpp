@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/testing/harness_camera.h"
 
 namespace follow_bot {

@@ -12,6 +12,7 @@
 #include <tuple>
 #include <vector>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/testing/harness_camera.h"
 
 namespace follow_bot {

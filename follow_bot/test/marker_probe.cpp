@@ -37,7 +37,7 @@ struct Options {
   std::string sign_image;
   double sign_width_m = 0.0;
   std::optional<follow_bot::TagDetectorConfig> tag;  // set by --tag-size: detect an AprilTag
-  follow_bot::CameraGeometry camera;
+  follow_bot_common::CameraGeometry camera;
   bool independent = false;
   std::vector<std::string> frames;
 };
@@ -95,8 +95,8 @@ Options parse(int argc, char** argv) {
       coefficients.push_back(std::atof(item.c_str()));
     const cv::Matx33d k(options.camera.fx, 0, options.camera.cx, 0, options.camera.fy,
                         options.camera.cy, 0, 0, 1);
-    options.camera.lens = follow_bot::CameraLens{k, coefficients, cv::Matx33d::eye()};
-    problem = follow_bot::validate(options.camera);
+    options.camera.lens = follow_bot_common::CameraLens{k, coefficients, cv::Matx33d::eye()};
+    problem = validate(options.camera);
     if (!problem.empty()) problem = "--distortion: " + problem;
   }
   if (problem.empty()) {

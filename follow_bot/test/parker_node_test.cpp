@@ -59,7 +59,7 @@ class ParkerNode : public ::testing::Test {
     static const cv::Mat bgr = [] {
       cv::Mat gray(480, 640, CV_8UC1, cv::Scalar(120));
       const follow_bot::test::TagView view = follow_bot::test::viewFrom(1.5, 0.0, 0.0);
-      follow_bot::test::drawTag(gray, follow_bot::CameraGeometry{}, 0, 0.30, view.rotation,
+      follow_bot::test::drawTag(gray, follow_bot_common::CameraGeometry{}, 0, 0.30, view.rotation,
                                 view.translation);
       cv::Mat out;
       cv::cvtColor(gray, out, cv::COLOR_GRAY2BGR);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {

@@ -14,6 +14,7 @@ extern "C" {
 #include <apriltag/tag36h11.h>
 }
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot::test {

@@ -7,7 +7,7 @@
 #include <tuple>
 #include <vector>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 struct Example {
@@ -77,4 +77,4 @@ TEST(ConfigFields, AHalfOpenRangeAndAReason) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 enum class Light { kRed, kAmber, kGreen };
@@ -22,4 +22,4 @@ TEST(EnumNames, ReadsTheTableBothWays) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 using Level = StatusReport::Level;
@@ -58,4 +58,4 @@ TEST(FrameRateStatus, ReportsTheRatesAndTheTimeout) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

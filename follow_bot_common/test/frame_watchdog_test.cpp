@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -183,4 +183,4 @@ TEST(FrameWatchdog, ResetForgetsTheMeasuredRate) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

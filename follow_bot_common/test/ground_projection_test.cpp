@@ -12,7 +12,7 @@
 
 #include "follow_bot_common/testing/harness_camera.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -252,4 +252,4 @@ TEST(IntrinsicsForFrame, ScalesWithTheFrameAndRejectsAnotherAspect) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 RawFrame frameOf(const std::vector<std::uint8_t>& data, std::uint32_t width, std::uint32_t height,
@@ -187,4 +187,4 @@ TEST(Encoding, SizesMatchTheirOpenCvTypes) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

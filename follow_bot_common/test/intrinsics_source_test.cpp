@@ -6,7 +6,7 @@
 
 #include <sensor_msgs/distortion_models.h>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 constexpr const char* kTopic = "/robot/camera/rgb/camera_info";
@@ -155,4 +155,4 @@ TEST(IntrinsicsSource, RectifiedFramesTakeTheProjectionWithoutTheLens) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

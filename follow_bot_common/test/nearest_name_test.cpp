@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 TEST(EditDistance, CountsTheUsualTypos) {
@@ -49,4 +49,4 @@ TEST(NearestName, SuggestsNothingForAnUnrelatedName) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

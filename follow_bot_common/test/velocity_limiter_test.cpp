@@ -7,7 +7,7 @@
 #include <random>
 #include <stdexcept>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -160,4 +160,4 @@ TEST(VelocityLimiter, OutputIsAlwaysFiniteAndWithinBounds) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

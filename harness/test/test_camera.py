@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from follow_bot import core
-
 from harness.camera import Camera
 from harness.geometry import incidence_deg, rotation_angle_deg
 

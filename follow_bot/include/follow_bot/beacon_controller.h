@@ -17,6 +17,7 @@
 
 #include "follow_bot/BeaconChaserDefaults.h"
 #include "follow_bot/colour_blobs.h"
+#include "follow_bot/common.h"
 #include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/enum_names.h"
 #include "follow_bot_common/ground_projection.h"

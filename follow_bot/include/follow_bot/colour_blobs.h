@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/BeaconChaserDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/ground_projection.h"
 

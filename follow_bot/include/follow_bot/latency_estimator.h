@@ -18,6 +18,7 @@
 #include <optional>
 #include <string>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {

@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/FollowerDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot_common/ground_projection.h"
 
 namespace follow_bot {

@@ -18,6 +18,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/FollowerDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot/hsv_box.h"
 #include "follow_bot/line_band.h"
 #include "follow_bot_common/config_fields.h"

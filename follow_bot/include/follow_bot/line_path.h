@@ -57,6 +57,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot/common.h"
 #include "follow_bot/line_controller.h"
 #include "follow_bot/path_geometry.h"
 #include "follow_bot/steering_law.h"

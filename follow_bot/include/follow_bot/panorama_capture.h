@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "follow_bot/PanoramaDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot_common/config_fields.h"
 
 namespace follow_bot {

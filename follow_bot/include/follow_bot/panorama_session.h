@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/PanoramaDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot/panorama_capture.h"
 #include "follow_bot/panorama_stitch.h"
 #include "follow_bot_common/config_fields.h"

@@ -10,6 +10,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/enum_names.h"
 #include "follow_bot_common/ground_projection.h"
 #include "image_converter/feature_matching.h"

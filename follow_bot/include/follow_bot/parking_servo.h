@@ -29,6 +29,7 @@
 #include <string>
 
 #include "follow_bot/ParkerDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/enum_names.h"

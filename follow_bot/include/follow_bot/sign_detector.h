@@ -21,6 +21,7 @@
 #include <opencv2/features2d.hpp>
 
 #include "follow_bot/ParkerDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot_common/config_fields.h"
 

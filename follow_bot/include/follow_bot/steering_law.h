@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 
+#include "follow_bot/common.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/enum_names.h"

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "follow_bot/ParkerDefaults.h"
+#include "follow_bot/common.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot_common/config_fields.h"
 

@@ -9,6 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "follow_bot/common.h"
 #include "follow_bot/path_geometry.h"
 #include "follow_bot_common/config_checks.h"
 

@@ -10,6 +10,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {

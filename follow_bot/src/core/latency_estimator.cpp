@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {

@@ -10,6 +10,7 @@
 #include <visp3/visual_features/vpFeaturePoint.h>
 #include <visp3/vs/vpServo.h>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {

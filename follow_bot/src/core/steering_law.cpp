@@ -3,6 +3,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "follow_bot/common.h"
 #include "follow_bot/line_controller.h"
 #include "follow_bot/line_path.h"
 #include "follow_bot_common/config_checks.h"

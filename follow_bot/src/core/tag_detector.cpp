@@ -18,6 +18,7 @@ extern "C" {
 #include <apriltag/tagStandard41h12.h>
 }
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {

@@ -15,6 +15,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "follow_bot/BeaconChaserConfig.h"
+#include "follow_bot/common.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
 #include "messages.h"
@@ -141,7 +142,7 @@ class BeaconChaserNodelet : public BehaviourNodelet<BeaconChaserConfig> {
 
 FOLLOW_BOT_EXPORT_NODELET(BeaconChaserNodelet)
 
-follow_bot::NodeHelp follow_bot::beaconChaserHelp() {
+follow_bot_common::NodeHelp follow_bot::beaconChaserHelp() {
   return behaviourHelp(
       "Chases coloured beacons: follows green and stops at red, or approaches one object to a "
       "set range (~mode).",

@@ -13,6 +13,7 @@
 #include <nav_msgs/Odometry.h>
 
 #include "follow_bot/FollowerConfig.h"
+#include "follow_bot/common.h"
 #include "follow_bot/latency_estimator.h"
 #include "follow_bot/line_path.h"
 #include "follow_bot/ros/nodelets.h"
@@ -185,7 +186,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
 
 FOLLOW_BOT_EXPORT_NODELET(FollowerNodelet)
 
-follow_bot::NodeHelp follow_bot::followerHelp() {
+follow_bot_common::NodeHelp follow_bot::followerHelp() {
   return behaviourHelp(
       "Follows a coloured line on the floor (lecture, pd or path steering, ~mode).",
       {{"in", "odom", "nav_msgs/Odometry", "with ~use_odom (the default)"},

@@ -11,6 +11,7 @@
 #include "follow_bot/BeaconDetections.h"
 #include "follow_bot/LineStatus.h"
 #include "follow_bot/colour_blobs.h"
+#include "follow_bot/common.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot/marker_target.h"
 #include "follow_bot_common/velocity_limiter.h"

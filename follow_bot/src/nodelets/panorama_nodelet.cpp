@@ -13,6 +13,7 @@
 #include <std_srvs/Trigger.h>
 
 #include "follow_bot/PanoramaConfig.h"
+#include "follow_bot/common.h"
 #include "follow_bot/panorama_session.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
@@ -113,7 +114,7 @@ class PanoramaNodelet : public BehaviourNodelet<PanoramaConfig> {
 
 FOLLOW_BOT_EXPORT_NODELET(PanoramaNodelet)
 
-follow_bot::NodeHelp follow_bot::panoramaHelp() {
+follow_bot_common::NodeHelp follow_bot::panoramaHelp() {
   return behaviourHelp(
       "Turns on the spot on request, photographing, and stitches the photographs into a "
       "panorama.",

@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "follow_bot/ParkerConfig.h"
+#include "follow_bot/common.h"
 #include "follow_bot/ros/nodelets.h"
 #include "follow_bot_common/ros/behaviour_nodelet.h"
 #include "messages.h"
@@ -117,7 +118,7 @@ class ParkerNodelet : public BehaviourNodelet<ParkerConfig> {
 
 FOLLOW_BOT_EXPORT_NODELET(ParkerNodelet)
 
-follow_bot::NodeHelp follow_bot::parkerHelp() {
+follow_bot_common::NodeHelp follow_bot::parkerHelp() {
   return behaviourHelp(
       "Parks the robot square in front of an AprilTag or a textured sign (~target).",
       {{"out", "~target_pose", "geometry_msgs/PoseStamped", "the marker in the camera frame"},

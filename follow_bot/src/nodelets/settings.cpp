@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "follow_bot/common.h"
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/tag_detector.h"
 #include "follow_bot_common/ros/config_mapping.h"

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <string>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 inline std::string requireFinite(const char* name, double value) {
   if (std::isfinite(value)) return "";
@@ -44,4 +44,4 @@ inline std::string requireAboveAtMost(const char* name, double value, double min
   return message.str();
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

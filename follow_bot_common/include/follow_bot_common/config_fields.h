@@ -21,7 +21,7 @@
 
 #include "follow_bot_common/config_checks.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // What validate() requires of a numeric field, in config_checks.h's messages.
 struct FieldRule {
@@ -118,4 +118,4 @@ std::string checkFields(const Struct& config) {
   return error;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

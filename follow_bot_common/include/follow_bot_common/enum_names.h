@@ -10,7 +10,7 @@
 #include <optional>
 #include <string_view>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 template <typename Enum>
 struct EnumName {
@@ -36,4 +36,4 @@ constexpr std::optional<Enum> valueIn(const EnumName<Enum> (&names)[N], std::str
   return std::nullopt;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -10,7 +10,7 @@
 
 #include "follow_bot_common/image_frame.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 class FrameCounts {
  public:
@@ -29,4 +29,4 @@ class FrameCounts {
   long camera_info_dropped_ = 0;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

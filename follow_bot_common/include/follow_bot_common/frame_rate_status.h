@@ -4,7 +4,7 @@
 
 #include "follow_bot_common/status_report.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 struct CameraHealth {
   bool frames_seen = false;     // a frame arrived since start-up
@@ -25,4 +25,4 @@ constexpr double kFrameRateTolerance = 0.2;
 // unknown expected rate accepts any.
 StatusReport frameRateStatus(const CameraHealth& health);
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

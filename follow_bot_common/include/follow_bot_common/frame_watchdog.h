@@ -3,7 +3,7 @@
 
 #include <deque>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // Tracks the arrival time of camera frames. Times are seconds on any one clock (wall or sim
 // time); pass the receipt time from the same clock as `now`, not the camera's header stamp, so
@@ -68,4 +68,4 @@ class FrameWatchdog {
   bool stop_sent_ = false;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

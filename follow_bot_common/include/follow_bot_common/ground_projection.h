@@ -12,7 +12,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // The lens between the scene and a raw (unrectified) image, CameraInfo's K, D and R: what maps a
 // raw pixel to the rectified camera of CameraGeometry (image_geometry's rectifyPoint).
@@ -68,4 +68,4 @@ cv::Point2d rectifyPixel(const CameraGeometry& camera, const cv::Point2d& raw);
 // horizon (their ray never meets the floor) and for non-finite input.
 std::optional<cv::Point2d> pixelToGround(const CameraGeometry& camera, double u, double v);
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -12,7 +12,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // The encodings every node in this project accepts (sensor_msgs/image_encodings names).
 enum class Encoding { kBgr8, kRgb8, kBgra8, kRgba8, kMono8, kMono16 };
@@ -77,4 +77,4 @@ cv::Mat toBgr8(const cv::Mat& image, Encoding encoding);
 // toBgr8 of a checked frame, in either byte order.
 cv::Mat frameToBgr8(const RawFrame& frame, Encoding encoding);
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

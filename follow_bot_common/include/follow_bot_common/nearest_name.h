@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // The optimal-string-alignment distance: the fewest insertions, deletions, substitutions and
 // swaps of two neighbouring characters (the usual typos) that turn `a` into `b`.
@@ -20,4 +20,4 @@ std::size_t editDistance(const std::string& a, const std::string& b);
 std::optional<std::string> nearestName(const std::string& typed,
                                        const std::vector<std::string>& known);
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

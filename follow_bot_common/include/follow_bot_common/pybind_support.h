@@ -117,7 +117,7 @@ using Validator = std::string (*)(const T&);
 template <class T>
 void bindFields(py::class_<T>& cls) {
   py::list cfg_fields;
-  follow_bot::forEachField<T>([&](const auto& field) {
+  follow_bot_common::forEachField<T>([&](const auto& field) {
     cls.def_readwrite(field.name, field.member);
     if (field.cfg_param != nullptr) {
       cfg_fields.append(py::make_tuple(field.name, field.cfg_param, field.cfg_scale));
@@ -182,11 +182,11 @@ py::array_t<double> matrixArray(const cv::Matx<double, Rows, Cols>& m) {
 // The enum's values under the names of its table (enum_names.h: the ~params' and ~status
 // topics' spellings); E("name") parses one.
 template <class E, std::size_t N>
-void defEnumNames(py::enum_<E>& cls, const follow_bot::EnumName<E> (&names)[N]) {
-  for (const follow_bot::EnumName<E>& entry : names) cls.value(entry.name, entry.value);
-  const follow_bot::EnumName<E>(*table)[N] = &names;  // a static table: outlives the module
+void defEnumNames(py::enum_<E>& cls, const follow_bot_common::EnumName<E> (&names)[N]) {
+  for (const follow_bot_common::EnumName<E>& entry : names) cls.value(entry.name, entry.value);
+  const follow_bot_common::EnumName<E>(*table)[N] = &names;  // a static table: outlives the module
   cls.def(py::init([table](const std::string& name) {
-    const std::optional<E> value = follow_bot::valueIn(*table, name);
+    const std::optional<E> value = follow_bot_common::valueIn(*table, name);
     if (!value) throw py::value_error("unknown value '" + name + "'");
     return *value;
   }));
@@ -196,9 +196,9 @@ void defEnumNames(py::enum_<E>& cls, const follow_bot::EnumName<E> (&names)[N]) 
 // parsed (ValueError naming the field for an unknown one), anything else must be an E.
 template <class Config, class E, std::size_t N>
 void defEnumField(py::class_<Config>& cls, const char* name, E Config::*field,
-                  const follow_bot::EnumName<E> (&names)[N]) {
+                  const follow_bot_common::EnumName<E> (&names)[N]) {
   const std::string field_name = name;
-  const follow_bot::EnumName<E>(*table)[N] = &names;  // a static table: outlives the module
+  const follow_bot_common::EnumName<E>(*table)[N] = &names;  // a static table: outlives the module
   cls.def_property(
       name, [field](const Config& config) { return config.*field; },
       [field, table, field_name](Config& config, const py::object& value) {
@@ -206,7 +206,8 @@ void defEnumField(py::class_<Config>& cls, const char* name, E Config::*field,
           config.*field = value.cast<E>();
           return;
         }
-        const std::optional<E> parsed = follow_bot::valueIn(*table, value.cast<std::string>());
+        const std::optional<E> parsed =
+            follow_bot_common::valueIn(*table, value.cast<std::string>());
         if (!parsed) {
           throw py::value_error(field_name + ": unknown value '" + value.cast<std::string>() + "'");
         }

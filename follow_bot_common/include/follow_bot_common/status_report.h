@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 struct StatusReport {
   // The values of diagnostic_msgs/DiagnosticStatus's OK, WARN and ERROR.
@@ -16,4 +16,4 @@ struct StatusReport {
   std::vector<std::pair<std::string, std::string>> values;  // key, value; in this order
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -6,7 +6,7 @@
 
 #include "follow_bot_common/CommandOutputDefaults.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // A planar velocity command in the robot frame (REP-103): linear along +x (forward) in m/s,
 // angular about +z in rad/s, positive = counter-clockwise = turning left.
@@ -64,4 +64,4 @@ class VelocityLimiter {
   Twist2D last_;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -1,6 +1,6 @@
 #include "follow_bot_common/frame_counts.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 namespace {
 // The diagnostics key of each FrameOutcome, in the enum's order.
@@ -34,4 +34,4 @@ std::vector<std::pair<std::string, long>> FrameCounts::cameraInfoValues() const 
           {"dropped_bad_camera_info", camera_info_dropped_}};
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

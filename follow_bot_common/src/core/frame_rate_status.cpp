@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <string>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 namespace {
 std::string format(const char* pattern, double value) {
@@ -42,4 +42,4 @@ StatusReport frameRateStatus(const CameraHealth& health) {
   return report;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

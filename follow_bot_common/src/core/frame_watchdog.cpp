@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 FrameWatchdog::FrameWatchdog(double min_timeout_s, double expected_period_s)
     : min_timeout_s_(min_timeout_s), expected_period_s_(expected_period_s) {
@@ -69,4 +69,4 @@ void FrameWatchdog::reset() {
   stop_sent_ = false;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -9,7 +9,7 @@
 
 #include "follow_bot_common/config_checks.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 constexpr double kMaxPitchRad = 89.0 * 3.14159265358979323846 / 180.0;
@@ -146,4 +146,4 @@ std::optional<cv::Point2d> pixelToGround(const CameraGeometry& camera, double u,
   return ground;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -2,7 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 std::optional<Encoding> parseEncoding(const std::string& name) {
   if (name == "bgr8" || name == "8UC3") return Encoding::kBgr8;
@@ -141,4 +141,4 @@ cv::Mat toBgr8(const cv::Mat& image, Encoding encoding) {
   return bgr;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

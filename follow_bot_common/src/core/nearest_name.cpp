@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 std::size_t editDistance(const std::string& a, const std::string& b) {
   // Three rows of the dynamic-programming table: the swap looks two rows back.
@@ -39,4 +39,4 @@ std::optional<std::string> nearestName(const std::string& typed,
   return nearest;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -6,7 +6,7 @@
 
 #include "follow_bot_common/config_checks.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 double finiteOrZero(double value) { return std::isfinite(value) ? value : 0.0; }
@@ -66,4 +66,4 @@ Twist2D VelocityLimiter::stop() {
 
 void VelocityLimiter::reset() { last_ = Twist2D(); }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -10,7 +10,7 @@
 #include "follow_bot_common/ros/publish_last.h"
 #include "follow_bot_msgs/BehaviourStatus.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 namespace {
 using Defaults = follow_bot_common::CommandOutputDefaults;
@@ -260,4 +260,4 @@ void CommandOutput::stopForOutage(const char* clock, const FrameWatchdog& watchd
   updater_.force_update();  // say why at once (a stopped /clock would hold back update())
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -10,7 +10,7 @@
 
 #include "follow_bot_common/image_frame.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 namespace {
 
@@ -125,4 +125,4 @@ bool IntrinsicsSource::fit(const cv::Size& size, CameraGeometry& camera, Update&
   return true;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

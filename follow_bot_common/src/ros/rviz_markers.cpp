@@ -2,7 +2,7 @@
 
 #include <utility>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 namespace {
 
@@ -91,4 +91,4 @@ void RvizMarkers::text(const std::string& ns, int id, const cv::Point3d& positio
   marker.text = text;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

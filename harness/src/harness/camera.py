@@ -16,8 +16,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from follow_bot import core
 
+from follow_bot import core
 from harness.geometry import rot_z
 
 FRAME_ID = "camera_rgb_optical_frame"

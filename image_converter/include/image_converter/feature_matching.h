@@ -17,20 +17,20 @@
 namespace image_converter {
 
 enum class Detector { kOrb, kSift, kAkaze };
-inline constexpr follow_bot::EnumName<Detector> kDetectorNames[] = {
+inline constexpr follow_bot_common::EnumName<Detector> kDetectorNames[] = {
     {Detector::kOrb, "orb"}, {Detector::kSift, "sift"}, {Detector::kAkaze, "akaze"}};
 
 // "orb", "sift" or "akaze" (lower case); nothing for anything else.
 inline std::optional<Detector> parseDetector(std::string_view name) {
-  return follow_bot::valueIn(kDetectorNames, name);
+  return follow_bot_common::valueIn(kDetectorNames, name);
 }
 inline std::string detectorName(Detector detector) {
-  return follow_bot::nameIn(kDetectorNames, detector);
+  return follow_bot_common::nameIn(kDetectorNames, detector);
 }
 // At compile time: any other name throws, which in a constant expression is a compile error, so
 // a new name in cfg/Matching.cfg cannot silently mean one of these.
 constexpr Detector detectorNamed(std::string_view name) {
-  if (const auto detector = follow_bot::valueIn(kDetectorNames, name)) return *detector;
+  if (const auto detector = follow_bot_common::valueIn(kDetectorNames, name)) return *detector;
   throw std::invalid_argument("no such detector");
 }
 // cfg/Matching.cfg's default detector (MatchingDefaults, generated), evaluated at compile time.
@@ -53,17 +53,18 @@ struct MatchOptions {
 
   static constexpr auto fields() {
     using C = MatchOptions;
-    using follow_bot::atLeast;
+    using follow_bot_common::atLeast;
     return std::make_tuple(
-        follow_bot::field("max_features", &C::max_features, atLeast(10)),
-        follow_bot::field("ratio", &C::ratio, follow_bot::aboveAtMost(0.0, 1.0)),
-        follow_bot::field("ransac_threshold_px", &C::ransac_threshold_px, follow_bot::positive()),
-        follow_bot::cfgField("min_inliers", &C::min_inliers,
-                             atLeast(4).because("a homography needs 4 points")),
-        follow_bot::field("min_contrast", &C::min_contrast, atLeast(0.0)),
-        follow_bot::field("refine", &C::refine),
-        follow_bot::field("held_out_every", &C::held_out_every,
-                          atLeast(2).because("1 would hold out all")));
+        follow_bot_common::field("max_features", &C::max_features, atLeast(10)),
+        follow_bot_common::field("ratio", &C::ratio, follow_bot_common::aboveAtMost(0.0, 1.0)),
+        follow_bot_common::field("ransac_threshold_px", &C::ransac_threshold_px,
+                                 follow_bot_common::positive()),
+        follow_bot_common::cfgField("min_inliers", &C::min_inliers,
+                                    atLeast(4).because("a homography needs 4 points")),
+        follow_bot_common::field("min_contrast", &C::min_contrast, atLeast(0.0)),
+        follow_bot_common::field("refine", &C::refine),
+        follow_bot_common::field("held_out_every", &C::held_out_every,
+                                 atLeast(2).because("1 would hold out all")));
   }
 };
 

@@ -18,9 +18,9 @@
 namespace image_converter {
 
 // The image_converter node's --help: what it does, its topics.
-follow_bot::NodeHelp imageConverterHelp();
+follow_bot_common::NodeHelp imageConverterHelp();
 
-class ImageConverterNodelet : public follow_bot::CheckedNodelet {
+class ImageConverterNodelet : public follow_bot_common::CheckedNodelet {
  public:
   ~ImageConverterNodelet() override;
 
@@ -29,7 +29,7 @@ class ImageConverterNodelet : public follow_bot::CheckedNodelet {
   void updateSubscription();
   void subscribe();
   void onImage(const sensor_msgs::ImageConstPtr& msg);
-  follow_bot::FrameOutcome handleImage(const sensor_msgs::ImageConstPtr& msg);
+  follow_bot_common::FrameOutcome handleImage(const sensor_msgs::ImageConstPtr& msg);
   void reportFrames(diagnostic_updater::DiagnosticStatusWrapper& status);
 
   OverlayConfig overlay_;
@@ -40,7 +40,7 @@ class ImageConverterNodelet : public follow_bot::CheckedNodelet {
   image_transport::Publisher output_;
   std::mutex connection_mutex_;
   std::mutex counts_mutex_;  // frames and the diagnostics timer may run on different threads
-  follow_bot::FrameCounts counts_;
+  follow_bot_common::FrameCounts counts_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   ros::SteadyTimer diagnostics_timer_;
 };

@@ -18,10 +18,12 @@ struct OverlayConfig {
   static constexpr auto fields() {
     using C = OverlayConfig;
     return std::make_tuple(
-        follow_bot::cfgField("radius_px", &C::radius_px, follow_bot::positive(), "circle_radius"),
-        follow_bot::cfgField("thickness_px", &C::thickness_px, follow_bot::positive(),
-                             "circle_thickness"),
-        follow_bot::field("min_image_size", &C::min_image_size, follow_bot::atLeast(0)));
+        follow_bot_common::cfgField("radius_px", &C::radius_px, follow_bot_common::positive(),
+                                    "circle_radius"),
+        follow_bot_common::cfgField("thickness_px", &C::thickness_px, follow_bot_common::positive(),
+                                    "circle_thickness"),
+        follow_bot_common::field("min_image_size", &C::min_image_size,
+                                 follow_bot_common::atLeast(0)));
   }
 };
 

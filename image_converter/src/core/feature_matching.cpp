@@ -183,7 +183,9 @@ std::string homographyDefect(const cv::Matx33d& homography, const cv::Size& size
   return "";
 }
 
-std::string validate(const MatchOptions& options) { return follow_bot::checkFields(options); }
+std::string validate(const MatchOptions& options) {
+  return follow_bot_common::checkFields(options);
+}
 
 std::string checkImage(const cv::Mat& image, const std::string& label, double min_contrast) {
   if (image.empty()) return label + " is empty";

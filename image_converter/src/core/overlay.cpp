@@ -4,7 +4,7 @@
 
 namespace image_converter {
 
-std::string validate(const OverlayConfig& config) { return follow_bot::checkFields(config); }
+std::string validate(const OverlayConfig& config) { return follow_bot_common::checkFields(config); }
 
 bool isValid(const OverlayConfig& config) { return validate(config).empty(); }
 

@@ -3,7 +3,7 @@
 // Subscribes `camera/rgb/image_raw` (image_transport, queue 1), draws a red circle at the centre
 // and publishes `~output` (bgr8). Input is subscribed only while `~output` has subscribers or a
 // window is shown, so an idle converter costs nothing. /diagnostics "<node>: frames": every frame
-// received, counted once under its outcome (follow_bot::FrameCounts).
+// received, counted once under its outcome (follow_bot_common::FrameCounts).
 #include <algorithm>
 #include <cstdlib>
 #include <mutex>
@@ -40,8 +40,8 @@ void ImageConverterNodelet::init() {
   ros::NodeHandle& pnh = getPrivateNodeHandle();
 
   const ImageConverterConfig cfg =
-      follow_bot::readConfig<ImageConverterConfig>(pnh);  // throws on bad ~params
-  follow_bot::assignFromConfig(overlay_, cfg);
+      follow_bot_common::readConfig<ImageConverterConfig>(pnh);  // throws on bad ~params
+  follow_bot_common::assignFromConfig(overlay_, cfg);
   display_ = cfg.display;
   transport_ = cfg.image_transport;
   if (display_ && !displayAvailable()) {
@@ -66,14 +66,14 @@ void ImageConverterNodelet::init() {
                                 "' is not an installed image_transport plugin");
   }
 
-  follow_bot::noteParamRead(pnh, "diagnostic_period");  // read by the Updater
+  follow_bot_common::noteParamRead(pnh, "diagnostic_period");  // read by the Updater
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(nh, pnh, pnh.getNamespace());
   diagnostics_->setHardwareID("none");
   diagnostics_->add("frames", this, &ImageConverterNodelet::reportFrames);
   // update() publishes at most every ~diagnostic_period; checked often so the last counts go out.
   diagnostics_timer_ =
       nh.createSteadyTimer(ros::WallDuration(0.1), [this](const ros::SteadyTimerEvent&) {
-        follow_bot::guardedCallback("diagnostics", [this] { diagnostics_->update(); });
+        follow_bot_common::guardedCallback("diagnostics", [this] { diagnostics_->update(); });
       });
 
   std::lock_guard<std::mutex> lock(connection_mutex_);
@@ -106,28 +106,32 @@ void ImageConverterNodelet::subscribe() {
                                               getPrivateNodeHandle());
   // Resolved first, so that a remapping of the base name also moves <base>/compressed
   // (image_transport appends the transport's suffix to the name as given).
-  input_ = input_transport_->subscribe(getNodeHandle().resolveName(follow_bot::topics::kImage), 1,
-                                       &ImageConverterNodelet::onImage, this, hints);
+  input_ =
+      input_transport_->subscribe(getNodeHandle().resolveName(follow_bot_common::topics::kImage), 1,
+                                  &ImageConverterNodelet::onImage, this, hints);
 }
 
 void ImageConverterNodelet::onImage(const sensor_msgs::ImageConstPtr& msg) {
   // Guarded: an exception drops the frame (throttled error, counted), never the node.
-  follow_bot::FrameOutcome outcome = follow_bot::FrameOutcome::kError;  // unless it returns
-  follow_bot::guardedCallback("image", [&] { outcome = handleImage(msg); });
+  follow_bot_common::FrameOutcome outcome =
+      follow_bot_common::FrameOutcome::kError;  // unless it returns
+  follow_bot_common::guardedCallback("image", [&] { outcome = handleImage(msg); });
   std::lock_guard<std::mutex> lock(counts_mutex_);
   counts_.countFrame(outcome);
 }
 
-follow_bot::FrameOutcome ImageConverterNodelet::handleImage(const sensor_msgs::ImageConstPtr& msg) {
-  const follow_bot::RawFrame raw = follow_bot::rawFrameOf(*msg);
-  const follow_bot::FrameCheck check = follow_bot::checkFrame(raw);
+follow_bot_common::FrameOutcome ImageConverterNodelet::handleImage(
+    const sensor_msgs::ImageConstPtr& msg) {
+  const follow_bot_common::RawFrame raw = follow_bot_common::rawFrameOf(*msg);
+  const follow_bot_common::FrameCheck check = follow_bot_common::checkFrame(raw);
   if (!check.ok()) {
     NODELET_ERROR_THROTTLE(1.0, "dropping frame on %s: %s", input_.getTopic().c_str(),
                            check.error.c_str());
     return check.outcome;
   }
   // The one copy (the overlay must not be drawn into a buffer other subscribers share).
-  cv_bridge::CvImage annotated(msg->header, "bgr8", follow_bot::frameToBgr8(raw, *check.encoding));
+  cv_bridge::CvImage annotated(msg->header, "bgr8",
+                               follow_bot_common::frameToBgr8(raw, *check.encoding));
   drawOverlay(annotated.image, overlay_);
 
   if (output_.getNumSubscribers() > 0) output_.publish(annotated.toImageMsg());
@@ -135,7 +139,7 @@ follow_bot::FrameOutcome ImageConverterNodelet::handleImage(const sensor_msgs::I
     cv::imshow(kWindowName, annotated.image);
     cv::waitKey(1);
   }
-  return follow_bot::FrameOutcome::kAccepted;
+  return follow_bot_common::FrameOutcome::kAccepted;
 }
 
 void ImageConverterNodelet::reportFrames(diagnostic_updater::DiagnosticStatusWrapper& status) {
@@ -149,9 +153,9 @@ void ImageConverterNodelet::reportFrames(diagnostic_updater::DiagnosticStatusWra
   for (const auto& [key, count] : counts_.frameValues()) status.add(key, count);
 }
 
-follow_bot::NodeHelp imageConverterHelp() {
+follow_bot_common::NodeHelp imageConverterHelp() {
   return {"Draws a red circle at the centre of each camera frame (the lecture's ImageConverter).",
-          {{"in", follow_bot::topics::kImage, "sensor_msgs/Image",
+          {{"in", follow_bot_common::topics::kImage, "sensor_msgs/Image",
             "image_transport, queue 1, subscribed only while ~output is; ~image_transport picks "
             "the transport"},
            {"out", "~output", "sensor_msgs/Image", "annotated, bgr8, the input's header"},

@@ -7,6 +7,7 @@
 #include <nodelet/nodelet.h>
 #include <pluginlib/class_list_macros.hpp>
 
+#include "follow_bot/common.h"
 #include "follow_bot_common/ros/node_help.h"
 
 namespace follow_bot {

@@ -10,7 +10,7 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // Declare it after everything its callback uses: destroyed first, it joins its thread (a call
 // in progress ends first) before those go.
@@ -46,4 +46,4 @@ class BlockingService {
   std::condition_variable_any changed_;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

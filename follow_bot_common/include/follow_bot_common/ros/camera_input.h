@@ -14,7 +14,7 @@
 
 #include "follow_bot_common/image_frame.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 inline RawFrame rawFrameOf(const sensor_msgs::Image& msg) {
   RawFrame frame;
@@ -60,4 +60,4 @@ bool guardedCallback(const char* what, Work&& work) {
   return false;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

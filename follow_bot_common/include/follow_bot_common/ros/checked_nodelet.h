@@ -14,7 +14,7 @@
 #include "follow_bot_common/NodeStartupDefaults.h"
 #include "follow_bot_common/ros/params.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 class CheckedNodelet : public nodelet::Nodelet {
  protected:
@@ -52,4 +52,4 @@ class CheckedNodelet : public nodelet::Nodelet {
   }
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -16,7 +16,7 @@
 #include "follow_bot_common/frame_watchdog.h"
 #include "follow_bot_common/velocity_limiter.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // Publishes geometry_msgs/Twist on `cmd_vel` through a VelocityLimiter while the behaviour is
 // active (docs/behaviour_contract.md):
@@ -129,4 +129,4 @@ class CommandOutput {
   int frames_since_check_ = 0;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -13,7 +13,7 @@
 
 #include "follow_bot_common/config_fields.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // `parse(value)` (a std::optional), or std::invalid_argument "~name must be <choices>, got
 // '<value>'" when it gives nothing.
@@ -75,4 +75,4 @@ void assignFromConfig(Struct& core, const ConfigT& config) {
   });
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -18,7 +18,7 @@
 
 #include "follow_bot_common/ground_projection.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // The intrinsics side of `camera` from `info` (the lens only for raw frames, `image_rectified`
 // false, through a lens with distortion). "" on success, else why the message was ignored
@@ -62,4 +62,4 @@ class IntrinsicsSource {
   cv::Size frame_size_;               // the last usable frame's
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

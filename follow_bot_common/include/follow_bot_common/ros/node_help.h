@@ -11,7 +11,7 @@
 
 #include <ros/package.h>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 struct TopicHelp {
   std::string direction;  // in, out or service
@@ -63,4 +63,4 @@ inline int printHelp(const std::string& package, const std::string& node, const 
   return 0;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

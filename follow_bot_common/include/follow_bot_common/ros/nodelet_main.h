@@ -10,7 +10,7 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 namespace detail {
 inline volatile std::sig_atomic_t& shutdownRequested() {
@@ -62,4 +62,4 @@ inline int runNodelet(int argc, char** argv, const std::string& default_name,
   return 0;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

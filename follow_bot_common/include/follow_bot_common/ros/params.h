@@ -25,7 +25,7 @@
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/nearest_name.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 namespace detail {
 // The ~params read so far, per private namespace (the nodelets of a manager share the process).
@@ -319,4 +319,4 @@ inline CameraGeometry readCameraMounting(const ros::NodeHandle& pnh,
   return camera;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

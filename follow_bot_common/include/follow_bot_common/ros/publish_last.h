@@ -3,7 +3,7 @@
 
 #include <ros/ros.h>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // Publishes `message` and holds `publisher` for 0.1 s of wall time. roscpp hands a message to its
 // poll thread; destroying the last Publisher handle right after drops the connections with the
@@ -14,4 +14,4 @@ void publishLast(const ros::Publisher& publisher, const Message& message) {
   ros::WallDuration(0.1).sleep();
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

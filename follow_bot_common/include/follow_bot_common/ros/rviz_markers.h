@@ -10,7 +10,7 @@
 #include <visualization_msgs/MarkerArray.h>
 #include <opencv2/core.hpp>
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 std_msgs::ColorRGBA rgba(double red, double green, double blue, double alpha = 1.0);
 
@@ -47,4 +47,4 @@ class RvizMarkers {
   visualization_msgs::MarkerArray array_;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

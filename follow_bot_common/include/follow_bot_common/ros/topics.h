@@ -3,9 +3,9 @@
 // the name `rosnode info` shows applies. Names as a Kinect/openni2 driver publishes them.
 #pragma once
 
-namespace follow_bot::topics {
+namespace follow_bot_common::topics {
 
 inline constexpr char kImage[] = "camera/rgb/image_raw";
 inline constexpr char kCameraInfo[] = "camera/rgb/camera_info";
 
-}  // namespace follow_bot::topics
+}  // namespace follow_bot_common::topics

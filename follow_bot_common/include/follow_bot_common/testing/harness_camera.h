@@ -9,7 +9,7 @@
 
 #include "follow_bot_common/ground_projection.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 inline double degrees(double deg) { return deg * 3.14159265358979323846 / 180.0; }
 
@@ -40,4 +40,4 @@ inline cv::Point3d projectToPixel(const CameraGeometry& camera, const cv::Point2
                      camera.cy + camera.fy * from_camera.dot(y_axis) / depth, depth);
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common
