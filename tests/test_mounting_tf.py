@@ -1,11 +1,13 @@
-"""The camera's mounting from tf: a behaviour node started without a
-robot description holds still and says which transform it waits for, drives as soon as the
-transform appears (with the mounting tf gives), falls back to its mounting ~params after
-~mounting_timeout (said once, loudly), and needs no tf at all with ~camera_mounting params.
+"""The camera's mounting from tf: a behaviour node (the C++ follower, and the Python lab node
+line_follower.py by the same rules, follow_bot.mounting) started without a robot description
+holds still and says which transform it waits for, drives as soon as the transform appears (with
+the mounting tf gives), falls back to its mounting ~params after ~mounting_timeout (said once,
+loudly), and needs no tf at all with ~camera_mounting params.
 
-Each case starts a roscore and the follower, then plays line frames from a child process (this
-file with --client CASE) in lockstep on its ~status (test_idle_contract's Lockstep), listening
-to /rosout and, when the case says so, publishing the robot's static tf itself.
+Each case starts a roscore and the node (named follower), then plays line frames from a child
+process (this file with --client CASE NODE) in lockstep on its ~status (test_idle_contract's
+Lockstep), listening to /rosout and, when the case says so, publishing the robot's static tf
+itself.
 """
 
 from __future__ import annotations
@@ -15,6 +17,8 @@ import math
 import sys
 import threading
 import time
+
+import pytest
 
 from harness.processes import run_with_client
 from harness.testing import probe_frame
@@ -77,7 +81,7 @@ def publish_robot_tf():
     return broadcaster
 
 
-def client(case: str) -> dict:
+def client(case: str, node: str) -> dict:
     import rospy
     from rosgraph_msgs.msg import Log
     from test_idle_contract import Lockstep
@@ -92,7 +96,7 @@ def client(case: str) -> dict:
                 logs.append((msg.level, msg.msg))
 
     rosout = rospy.Subscriber("/rosout", Log, on_log)
-    steps = Lockstep("follower")
+    steps = Lockstep("follower", reads_camera_info=node == "follower")
     line = probe_frame("line")
     out: dict = {}
     if case == "tf_appears":
@@ -116,16 +120,21 @@ def client(case: str) -> dict:
 
 
 NODES = {
-    "tf_appears": ["follow_bot", "follower", "_mode:=pd", "_mounting_timeout:=60"],
-    "fallback": ["follow_bot", "follower", "_mode:=pd", "_mounting_timeout:=1",
-                 "_camera_height:=0.25"],
-    "params": ["follow_bot", "follower", "_mode:=pd", "_camera_mounting:=params"],
-}  # fmt: skip
+    "follower": ["follow_bot", "follower"],
+    "line_follower.py": ["follow_bot", "line_follower.py", "__name:=follower"],
+}
+CASE_PARAMS = {
+    "tf_appears": ["_mode:=pd", "_mounting_timeout:=60"],
+    "fallback": ["_mode:=pd", "_mounting_timeout:=1", "_camera_height:=0.25"],
+    "params": ["_mode:=pd", "_camera_mounting:=params"],
+}
+node = pytest.mark.parametrize("node", NODES)
 
 
-def play(case: str) -> dict:
-    result = run_with_client(NODES[case], [sys.executable, __file__, "--client", case], timeout=180)
-    print(case, json.dumps(result)[:2000])
+def play(node: str, case: str) -> dict:
+    command = NODES[node] + CASE_PARAMS[case]
+    result = run_with_client(command, [sys.executable, __file__, "--client", case, node], timeout=180)
+    print(node, case, json.dumps(result)[:2000])
     return result
 
 
@@ -141,8 +150,9 @@ def messages(result: dict, words: str) -> list[str]:
     return [text for _, text in result["logs"] if words in text]
 
 
-def test_without_tf_it_holds_still_and_drives_once_tf_appears():
-    result = play("tf_appears")
+@node
+def test_without_tf_it_holds_still_and_drives_once_tf_appears(node):
+    result = play(node, "tf_appears")
     before = result["before_tf"]
     waiting = result["statuses"][:before]
     assert all(s[0] is False and s[1] is False for s in waiting), waiting[:3]
@@ -168,8 +178,9 @@ def test_without_tf_it_holds_still_and_drives_once_tf_appears():
     assert WAITING not in states(result)[known:]
 
 
-def test_after_the_timeout_it_falls_back_to_the_params_once():
-    result = play("fallback")
+@node
+def test_after_the_timeout_it_falls_back_to_the_params_once(node):
+    result = play(node, "fallback")
     warnings = [(level, text) for level, text in result["logs"] if "falling back" in text]
     assert warnings == [
         (4, "/follower: no camera mounting from tf (base_link <- 'camera_rgb_optical_frame') "
@@ -184,8 +195,9 @@ def test_after_the_timeout_it_falls_back_to_the_params_once():
     assert drives(result)
 
 
-def test_with_params_no_tf_is_needed():
-    result = play("params")
+@node
+def test_with_params_no_tf_is_needed(node):
+    result = play(node, "params")
     assert WAITING not in states(result)
     assert drives(result)
     assert messages(result, "camera mounting from") == [
@@ -196,4 +208,4 @@ def test_with_params_no_tf_is_needed():
 
 
 if __name__ == "__main__" and sys.argv[1:2] == ["--client"]:
-    print(json.dumps(client(sys.argv[2]), default=float))
+    print(json.dumps(client(sys.argv[2], sys.argv[3]), default=float))

@@ -304,6 +304,24 @@ def test_steering_laws_equal_cpp_on_course_frames(tmp_path, mode):
     assert states == ({"following"} if mode == "path" else {"following", "lost"})
 
 
+def test_mounting_from_transform_reads_tf_as_the_nodes_do():
+    # A URDF optical frame (rpy -90, 0, -90 deg: z forward, x right, y down) 0.10 m ahead and
+    # 0.28 m above a base_link 0.02 m above the floor: a level camera 0.30 m up.
+    level = (-0.5, 0.5, -0.5, 0.5)
+    intrinsics = core.CameraGeometry(fx=400.0, fy=400.0, cx=160.0, cy=120.0)
+    camera, warning = core.mounting_from_transform((0.10, 0.0, 0.28), level, 0.02, intrinsics)
+    assert (camera.height_m, camera.pitch_rad, camera.x_offset_m) == pytest.approx((0.30, 0.0, 0.10))
+    assert (camera.fx, camera.cx) == (400.0, 160.0) and warning == ""
+    assert core.same_intrinsics(camera, intrinsics) and not core.same_mounting(camera, intrinsics)
+    assert core.describe_mounting(camera) == "height 0.300 m, pitch 0.0 deg down, x offset 0.100 m"
+    _, warning = core.mounting_from_transform((0.10, 0.05, 0.28), level, 0.02, intrinsics)
+    assert "0.05 m to the side" in warning  # an offset the model leaves out
+    upside_down = (0.5, 0.5, 0.5, 0.5)  # the optical y axis points up: rolled 180 deg
+    with pytest.raises(ValueError, match="roll"):
+        core.mounting_from_transform((0.10, 0.0, 0.28), upside_down, 0.02, intrinsics)
+    assert core.WAITING_FOR_MOUNTING == "waiting for camera mounting"
+
+
 def test_path_law_without_a_camera_is_pd_and_exposes_its_memory():
     config = core.SteeringConfig(mode="path")
     assert isinstance(core.make_steering_law(config), core.PdLaw)

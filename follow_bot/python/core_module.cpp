@@ -16,6 +16,7 @@
 
 #include "follow_bot/beacon_controller.h"
 #include "follow_bot/colour_blobs.h"
+#include "follow_bot/common.h"
 #include "follow_bot/line_controller.h"
 #include "follow_bot/line_detector.h"
 #include "follow_bot/line_path.h"
@@ -24,6 +25,7 @@
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/steering_law.h"
 #include "follow_bot/tag_detector.h"
+#include "follow_bot_common/camera_mounting.h"
 #include "follow_bot_common/frame_watchdog.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/pybind_support.h"
@@ -62,7 +64,8 @@ void bindVelocity(py::module_& m) {
       .def_readwrite("max_linear_accel", &VelocityLimiterConfig::max_linear_accel)
       .def_readwrite("max_angular_accel", &VelocityLimiterConfig::max_angular_accel)
       .def_readwrite("allow_reverse", &VelocityLimiterConfig::allow_reverse);
-  defKeywordInit(config, static_cast<Validator<VelocityLimiterConfig>>(&validate));
+  defKeywordInit(config,
+                 static_cast<Validator<VelocityLimiterConfig>>(&follow_bot_common::validate));
 
   py::class_<VelocityLimiter>(m, "VelocityLimiter",
                               "Clamps and rate-limits velocity commands; never passes a NaN.")
@@ -350,7 +353,30 @@ void bindGeometry(py::module_& m) {
       .def_readwrite("height_m", &CameraGeometry::height_m)
       .def_readwrite("pitch_rad", &CameraGeometry::pitch_rad)
       .def_readwrite("x_offset_m", &CameraGeometry::x_offset_m);
-  defKeywordInit(camera, static_cast<Validator<CameraGeometry>>(&validate));
+  defKeywordInit(camera, static_cast<Validator<CameraGeometry>>(&follow_bot_common::validate));
+
+  m.def(
+      "mounting_from_transform",
+      [](const std::array<double, 3>& origin, const std::array<double, 4>& quaternion,
+         double base_height_m, CameraGeometry camera) {
+        std::string warning;
+        const std::string error =
+            mountingFromTransform(cv::Vec3d(origin[0], origin[1], origin[2]),
+                                  rotationOfQuaternion(cv::Vec4d(quaternion[0], quaternion[1],
+                                                                 quaternion[2], quaternion[3])),
+                                  base_height_m, camera, warning);
+        if (!error.empty()) throw py::value_error(error);
+        return py::make_tuple(camera, warning);
+      },
+      "origin"_a, "quaternion"_a, "base_height_m"_a, "camera"_a,
+      "(camera, warning): `camera` with the mounting of an optical frame at `origin` (x, y, z) "
+      "turned by `quaternion` (x, y, z, w) in a base frame `base_height_m` above the floor, as "
+      "tf gives it; ValueError for a mounting the ground projection cannot model.");
+  m.def("same_mounting", &sameMounting, "a"_a, "b"_a, "Whether two cameras' mountings agree.");
+  m.def("same_intrinsics", &sameIntrinsics, "a"_a, "b"_a,
+        "Whether two cameras' intrinsics (and lens) agree.");
+  m.def("describe_mounting", &describeMounting, "camera"_a, "The mounting in words, for logs.");
+  m.attr("WAITING_FOR_MOUNTING") = kWaitingForMountingState;
 }
 
 void bindBeaconController(py::module_& m) {

@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-namespace follow_bot {
+namespace follow_bot_common {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -125,6 +125,9 @@ TEST(CameraMounting, DescribesAndComparesMountings) {
   camera.pitch_rad = radians(20.0);
   camera.x_offset_m = -0.087;
   EXPECT_EQ(describeMounting(camera), "height 0.300 m, pitch 20.0 deg down, x offset -0.087 m");
+  CameraGeometry level = camera;
+  level.pitch_rad = -1e-17;  // a level URDF camera through tf's quaternion
+  EXPECT_EQ(describeMounting(level), "height 0.300 m, pitch 0.0 deg down, x offset -0.087 m");
   CameraGeometry other = camera;
   other.fx = 1.0;
   EXPECT_TRUE(sameMounting(camera, other));
@@ -133,4 +136,4 @@ TEST(CameraMounting, DescribesAndComparesMountings) {
 }
 
 }  // namespace
-}  // namespace follow_bot
+}  // namespace follow_bot_common

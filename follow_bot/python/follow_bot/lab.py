@@ -1,7 +1,7 @@
 """What every lab-style rospy node (follow_bot/scripts) shares: start-up, ~params checked by the
 C++ validate(), camera frames as numpy arrays, and the behaviour contract for cmd_vel.
 
-The contract (docs/behaviour_contract.md), as follow_bot::CommandOutput keeps it for the C++
+The contract (docs/behaviour_contract.md), as follow_bot_common::CommandOutput keeps it for the C++
 nodes: commands pass the VelocityLimiter; while the behaviour is active one Twist per frame, on
 becoming idle the limiter's ramp down to one zero and then nothing; one ~status per frame (the
 lockstep simulator waits for it); no frame for ~watchdog_timeout of ROS time (or 3 frame
@@ -10,7 +10,6 @@ zero; on shutdown a last zero.
 """
 
 import argparse
-import math
 import sys
 import time
 
@@ -48,22 +47,11 @@ def configured(make, params, prefix="", **fixed):
         sys.exit(2)
 
 
-def camera_geometry(info):
-    """core.CameraGeometry of a CameraInfo's K and the mounting ~params the C++ nodes read
-    (~camera_height m, ~camera_pitch_deg down positive, ~camera_x_offset m; defaults: the core's).
-    Raises ValueError for unusable intrinsics."""
-    default = core.CameraGeometry()
+def camera_intrinsics(info):
+    """core.CameraGeometry of a CameraInfo's K, with the default mounting (follow_bot.mounting
+    gives the real one). Raises ValueError for unusable intrinsics."""
     fx, _, cx, _, fy, cy = info.K[:6]
-    pitch_deg = rospy.get_param("~camera_pitch_deg", math.degrees(default.pitch_rad))
-    return core.CameraGeometry(
-        fx=fx,
-        fy=fy,
-        cx=cx,
-        cy=cy,
-        height_m=rospy.get_param("~camera_height", default.height_m),
-        pitch_rad=math.radians(pitch_deg),
-        x_offset_m=rospy.get_param("~camera_x_offset", default.x_offset_m),
-    )
+    return core.CameraGeometry(fx=fx, fy=fy, cx=cx, cy=cy)
 
 
 def subscribe_frames(callback):
@@ -103,7 +91,7 @@ class CommandOutput:
         rospy.on_shutdown(self._shutdown)
 
     def send(self, header, desired, active, state):
-        """One frame's decision, by follow_bot::CommandOutput::send's rules: the limiter runs on
+        """One frame's decision, by follow_bot_common::CommandOutput::send's rules: the limiter runs on
         every frame; the command goes out while active, and while idle until it is zero (that
         zero included); the frame's ~status. Returns the limited command."""
         stamp = header.stamp.to_sec() if not header.stamp.is_zero() else rospy.get_time()

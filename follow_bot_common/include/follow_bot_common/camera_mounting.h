@@ -13,11 +13,17 @@
 
 #include "follow_bot_common/ground_projection.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // The largest roll or yaw of the optical frame still taken as zero: a URDF rounding or a small
 // measuring error, well below what would bias the ground projection by more than ~1 cm at 1 m.
 constexpr double kMountingToleranceDeg = 1.0;
+
+// The state a behaviour reports while its camera's mounting is not known yet (it holds still).
+constexpr const char* kWaitingForMountingState = "waiting for camera mounting";
+
+// The rotation matrix of a quaternion given as tf does, (x, y, z, w); normalised first.
+cv::Matx33d rotationOfQuaternion(const cv::Vec4d& xyzw);
 
 // The mounting of a camera whose optical frame sits at `origin` with axes `rotation` (columns:
 // the optical x, y, z axes) in the base frame, that base frame being `base_height_m` above the
@@ -34,4 +40,4 @@ std::string describeMounting(const CameraGeometry& camera);
 // Whether two geometries have the same mounting (intrinsics not compared).
 bool sameMounting(const CameraGeometry& a, const CameraGeometry& b);
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -4,7 +4,9 @@
 #include <cstdio>
 #include <sstream>
 
-namespace follow_bot {
+#include <opencv2/core/quaternion.hpp>
+
+namespace follow_bot_common {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -14,6 +16,10 @@ constexpr double kSameMountingTolerance = 1e-9;
 double degrees(double rad) { return rad * 180.0 / kPi; }
 
 }  // namespace
+
+cv::Matx33d rotationOfQuaternion(const cv::Vec4d& xyzw) {
+  return cv::Quatd(xyzw[3], xyzw[0], xyzw[1], xyzw[2]).toRotMat3x3();
+}
 
 std::string mountingFromTransform(const cv::Vec3d& origin, const cv::Matx33d& rotation,
                                   double base_height_m, CameraGeometry& camera,
@@ -65,9 +71,11 @@ std::string mountingFromTransform(const cv::Vec3d& origin, const cv::Matx33d& ro
 }
 
 std::string describeMounting(const CameraGeometry& camera) {
+  // Rounded to the 0.1 deg printed, then + 0.0: a pitch a hair below level reads 0.0, not -0.0.
+  const double pitch_deg = std::round(degrees(camera.pitch_rad) * 10.0) / 10.0 + 0.0;
   char text[128];
   std::snprintf(text, sizeof text, "height %.3f m, pitch %.1f deg down, x offset %.3f m",
-                camera.height_m, degrees(camera.pitch_rad) + 0.0, camera.x_offset_m);  // no "-0.0"
+                camera.height_m, pitch_deg, camera.x_offset_m);
   return text;
 }
 
@@ -77,4 +85,4 @@ bool sameMounting(const CameraGeometry& a, const CameraGeometry& b) {
          std::abs(a.x_offset_m - b.x_offset_m) < kSameMountingTolerance;
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

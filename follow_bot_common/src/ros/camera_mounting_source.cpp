@@ -6,8 +6,6 @@
 #include <utility>
 
 #include <ros/console.h>
-#include <tf2/LinearMath/Matrix3x3.h>
-#include <tf2/LinearMath/Quaternion.h>
 #include <tf2/exceptions.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
@@ -15,7 +13,7 @@
 #include "follow_bot_common/camera_mounting.h"
 #include "follow_bot_common/ros/params.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 struct SharedTfListener {
   explicit SharedTfListener(const ros::NodeHandle& nh) : listener(buffer, nh) {}
@@ -124,9 +122,7 @@ std::optional<CameraGeometry> CameraMountingSource::fromTf(const std::string& fr
   }
   const auto& t = camera_in_base.transform.translation;
   const auto& q = camera_in_base.transform.rotation;
-  const tf2::Matrix3x3 r(tf2::Quaternion(q.x, q.y, q.z, q.w));
-  const cv::Matx33d rotation(r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1],
-                             r[2][2]);
+  const cv::Matx33d rotation = rotationOfQuaternion(cv::Vec4d(q.x, q.y, q.z, q.w));
   CameraGeometry mounted = camera;
   std::string warning;
   const std::string error =
@@ -157,4 +153,4 @@ void CameraMountingSource::use(const CameraGeometry& mounting, const std::string
   }
 }
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

@@ -19,6 +19,7 @@
 #include <sensor_msgs/Image.h>
 #include <boost/thread/recursive_mutex.hpp>
 
+#include "follow_bot_common/camera_mounting.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/ros/camera_input.h"
 #include "follow_bot_common/ros/camera_mounting_source.h"
@@ -31,7 +32,7 @@
 #include "follow_bot_common/ros/topics.h"
 #include "follow_bot_common/status_report.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 // A behaviour node's --help: `summary`, the topics every behaviour has (camera in, the
 // CommandOutput's), then its `own` (its debug image included, when it has one).
@@ -289,8 +290,7 @@ class BehaviourNodelet : public CheckedNodelet {
     const Frame frame{msg->header, image->image, CommandOutput::frameTime(msg->header).toSec()};
     updateDiagnostics();
     const bool mounted = updateMounting(msg->header.frame_id);
-    const Decision decision =
-        mounted ? step(frame) : Decision{{}, false, CameraMountingSource::kWaitingState};
+    const Decision decision = mounted ? step(frame) : Decision{{}, false, kWaitingForMountingState};
     const Twist2D sent = output_->send(msg->header, decision.desired, decision.active,
                                        decision.state, decision.halt);
     report(frame, sent);
@@ -344,4 +344,4 @@ class BehaviourNodelet : public CheckedNodelet {
   image_transport::Subscriber image_sub_;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common

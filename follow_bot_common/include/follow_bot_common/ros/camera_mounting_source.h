@@ -25,14 +25,12 @@
 
 #include "follow_bot_common/ground_projection.h"
 
-namespace follow_bot {
+namespace follow_bot_common {
 
 struct SharedTfListener;  // a tf2 buffer and its listener, shared within the process
 
 class CameraMountingSource {
  public:
-  // The state a behaviour reports while the mounting is unknown (it holds still).
-  static constexpr const char* kWaitingState = "waiting for camera mounting";
   // The floor frame of REP 120, for base_frame's height above the floor.
   static constexpr const char* kFootprintFrame = "base_footprint";
   static constexpr double kDefaultTimeoutS = 5.0;
@@ -68,4 +66,4 @@ class CameraMountingSource {
   bool from_tf_ = false;
 };
 
-}  // namespace follow_bot
+}  // namespace follow_bot_common
