@@ -1,6 +1,7 @@
 """Every command-line tool behaves as ROS users expect: --help prints the usage on stdout and
 exits 0 (starting nothing), bad usage exits 2 with the problem and the usage on stderr. A node's
---help also names its topics and the README that documents its parameters."""
+--help also names its topics and its manual (doc/<node>.md of its package), which documents them
+and its parameters."""
 
 import json
 import os
@@ -69,17 +70,18 @@ def test_help_prints_the_usage_and_exits_0(tool, flag):
 @pytest.mark.parametrize("node", NODES)
 def test_a_node_help_names_its_topics_and_its_manual(node):
     help_text = run([*TOOLS[node], "--help"]).stdout
-    manual = re.search(r"^  (/\S+/README\.md), section (\S+)$", help_text, re.M)
+    manual = re.search(r"^  (/\S+)/doc/(\S+)\.md$", help_text, re.M)
     assert manual, help_text
     assert manual[2] == node
-    readme = Path(manual[1]).read_text()
-    heading = f"## {node} (node `{node}`"
-    assert heading in readme
-    # The README's section on the node (the truth the help is held to) names every topic.
-    section = readme.split(heading, 1)[1].split("\n## ", 1)[0]
+    package = run(["rospack", "find", TOOLS[node][1]]).stdout.strip()
+    assert manual[1] == package, help_text
+    page = Path(manual[0].strip()).read_text()
+    # The node's manual (the truth the help is held to) is about the node and names every topic.
+    assert page.startswith(f"# {node} (node `{node}`"), page[:200]
+    assert "<!-- params: " in page  # its generated parameter table (tools/param_tables.py)
     topics = re.findall(r"^  (?:in|out|service) +(\S+)", help_text, re.M)
     assert "camera/rgb/image_raw" in topics, help_text
-    undocumented = [t for t in topics if t != "/diagnostics" and f"`{t}`" not in section]
+    undocumented = [t for t in topics if t != "/diagnostics" and f"`{t}`" not in page]
     assert undocumented == [], help_text
 
 

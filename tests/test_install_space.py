@@ -8,8 +8,9 @@ status the sim waits for) and `harness` into a tmp prefix; the installed sim pla
 sim time on the course against the installed constant_twist.
 test_installed_launch_files (marked full, make test-full only: colcon builds every package, several
 minutes): `from follow_bot import core; from image_converter import core` with Debian's python and
-the venv's; course.launch (lockstep) drives and ends on a zero Twist; park.launch starts with the
-tag and with the sign.
+the venv's; each node's --help names its installed manual (share/<package>/doc/<node>.md);
+course.launch (lockstep) drives and ends on a zero Twist; park.launch starts with the tag and with
+the sign.
 """
 
 import os
@@ -140,6 +141,14 @@ def test_installed_launch_files(tmp_path):
             str(next((install / package).glob(f"lib/python3/dist-packages/{package}/core.*.so")))
             for package in ("follow_bot", "image_converter")
         ]  # fmt: skip
+    for package, node in [("follow_bot", "follower"), ("follow_bot", "beacon_chaser"),
+                          ("follow_bot", "parker"), ("follow_bot", "panorama"),
+                          ("image_converter", "image_converter")]:  # fmt: skip
+        # --help names the node's manual, installed with it (no master needed).
+        shown = subprocess.run(["rosrun", package, node, "--help"], env=installed,
+                               capture_output=True, text=True, check=True, timeout=30)  # fmt: skip
+        manual = install / package / "share" / package / "doc" / f"{node}.md"
+        assert f"  {manual}\n" in shown.stdout and manual.is_file(), shown.stdout
     with private_master(env=installed, roscore=True) as env:
         out, twists = drive_then_ctrl_c(
             env, ["harness", "course.launch", "lockstep:=true"], lambda t: t[0] > 0.2

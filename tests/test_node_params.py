@@ -290,7 +290,7 @@ def test_strict_params_makes_a_misspelt_parameter_a_startup_error(master_env, no
     assert f"cannot start: {unknown_warning(param, nearest)} (~strict_params is true)" in out, out
 
 
-# Every documented ~param of each node (the README tables and follow_bot_common's), set at once:
+# Every documented ~param of each node (its manual's tables and follow_bot_common's), set at once:
 # none may be taken for unknown.
 COMMON = [
     "_camera_mounting:=params", "_base_frame:=base_link", "_mounting_timeout:=5",

@@ -17,7 +17,7 @@ import pytest
 from harness.processes import run_with_client
 from harness.testing import image_msg, odom_msg, pinhole_info, probe_frame
 
-FRAME_TIMEOUT_S = 1.0  # the node's ~frame_timeout default (follow_bot/README.md)
+FRAME_TIMEOUT_S = 1.0  # the node's ~frame_timeout default (follow_bot/doc/panorama.md)
 STOP_WITHIN_S = 0.2  # the safety contract: a zero Twist within 0.2 s when frames stop
 
 

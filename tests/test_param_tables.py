@@ -1,5 +1,6 @@
-"""The README parameter tables are generated from the .cfg files: they fail this test as soon as
-a .cfg (name, type, default, range, unit, description) and its table drift apart."""
+"""The parameter tables of the READMEs and the nodes' manuals (<package>/doc/*.md) are generated
+from the .cfg files: they fail this test as soon as a .cfg (name, type, default, range, unit,
+description) and its table drift apart."""
 
 import subprocess
 import sys

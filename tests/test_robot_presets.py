@@ -4,7 +4,7 @@ the robot's published URDF composed down to the RGB optical centre (numbers copi
 those sources, not from the presets); every behaviour launch file turns robot:=NAME into the
 preset's topics, transport, expected rate and ~limit_* params, with the URDF made on Debian's
 python3 without the harness venv; roslaunch --ros-args reports no optional arg as Required; and
-the README's "On a real robot" commands run.
+the "On a real robot" commands of the manual (follow_bot/doc/robot.md) run.
 """
 
 from __future__ import annotations
@@ -214,9 +214,9 @@ def test_robot_arg_sets_topics_transport_rate_limits_and_description(launch, rob
 
 
 def readme_robot_commands() -> list[str]:
-    """The shell commands of follow_bot/README.md's "On a real robot" (its ```sh blocks)."""
-    readme = (REPO / "follow_bot" / "README.md").read_text()
-    section = readme.split("### On a real robot", 1)[1].split("\n## ", 1)[0]
+    """The shell commands of follow_bot/doc/robot.md's "On a real robot" (its ```sh blocks)."""
+    manual = (REPO / "follow_bot" / "doc" / "robot.md").read_text()
+    section = manual.split("\n## On a real robot\n", 1)[1].split("\n## ", 1)[0]
     blocks = re.findall(r"```sh\n(.*?)```", section, re.S)
     lines = [line.split("  #")[0].strip() for block in blocks for line in block.splitlines()]
     return [line for line in lines if line and not line.startswith("#")]
@@ -238,4 +238,4 @@ def test_the_readme_robot_steps_run():
             config = loaded(launch, [w for w in words[3:] if ":=" in w])
             assert config.nodes, command
         else:
-            pytest.fail(f"README step not covered by this test: {command}")
+            pytest.fail(f"manual step not covered by this test: {command}")

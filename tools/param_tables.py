@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Generate the README parameter tables from the dynamic_reconfigure .cfg files.
+"""Generate the READMEs' and manuals' parameter tables from the dynamic_reconfigure .cfg files.
 
 The .cfg files are the single declaration of every runtime parameter: name, type, default,
 range, and the description, which ends with its unit in brackets ("Top speed [m/s]"; none for a
@@ -8,8 +8,9 @@ plain number). A Markdown file holds a table between
     <!-- params: follow_bot/cfg/Follower.cfg -->
     <!-- end params -->
 
-(the path relative to the repository root). --write rewrites every such table in the READMEs;
---check (the default) exits 1 naming each table that differs from its .cfg.
+(the path relative to the repository root), in README.md, a package's README.md or its manuals
+(<package>/doc/*.md), or docs/*.md. --write rewrites every such table; --check (the default)
+exits 1 naming each table that differs from its .cfg.
 """
 
 import argparse
@@ -55,7 +56,8 @@ def table(cfg: Path) -> str:
 
 
 def documents() -> list[Path]:
-    return sorted([ROOT / "README.md", *ROOT.glob("*/README.md"), *ROOT.glob("docs/*.md")])
+    readmes = [ROOT / "README.md", *ROOT.glob("*/README.md")]
+    return sorted([*readmes, *ROOT.glob("*/doc/*.md"), *ROOT.glob("docs/*.md")])
 
 
 def regenerate(text: str) -> str:

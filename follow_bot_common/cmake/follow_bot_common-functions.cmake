@@ -7,8 +7,14 @@ set(FOLLOW_BOT_COMMON_CMAKE_DIR ${CMAKE_CURRENT_LIST_DIR})
 # executable NODE_NAME of the calling package, a generated main (node_main.cpp.in) that runs the
 # nodelet made by the C++ expression NODELET_FACTORY() (declared in NODELET_HEADER, linked from
 # NODELET_LIBRARY) in a process of its own and sends its final stop on shutdown; with -h or
+<<<<<<< HEAD
 # --help it prints NODE_HELP() (a follow_bot_common::NodeHelp, declared in NODELET_HEADER) and the
 # package's README.md, without a master. Installed, and the package's README.md with it.
+=======
+# --help it prints NODE_HELP() (a follow_bot::NodeHelp, declared in NODELET_HEADER) and the path
+# of the node's manual, the package's doc/NODE_NAME.md (which must exist), without a master.
+# Installed, and the package's README.md and doc/ (its manuals) with it.
+>>>>>>> manuals
 # The target is NODE_NAME, or NODE_NAME_node when that is the package's own name.
 function(add_behaviour_node NODE_NAME NODELET_FACTORY NODELET_HEADER NODELET_LIBRARY NODE_HELP)
   set(target ${NODE_NAME})
@@ -21,10 +27,15 @@ function(add_behaviour_node NODE_NAME NODELET_FACTORY NODELET_HEADER NODELET_LIB
   set_target_properties(${target} PROPERTIES OUTPUT_NAME ${NODE_NAME})
   target_link_libraries(${target} ${NODELET_LIBRARY} ${catkin_LIBRARIES})
   install(TARGETS ${target} RUNTIME DESTINATION ${CATKIN_PACKAGE_BIN_DESTINATION})
-  get_property(readme_installed DIRECTORY PROPERTY FOLLOW_BOT_README_INSTALLED)
-  if(NOT readme_installed)  # once per package
+  if(NOT EXISTS ${PROJECT_SOURCE_DIR}/doc/${NODE_NAME}.md)
+    message(FATAL_ERROR "add_behaviour_node(${NODE_NAME}): no manual ${PROJECT_SOURCE_DIR}/doc/"
+      "${NODE_NAME}.md, the page its --help names")
+  endif()
+  get_property(docs_installed DIRECTORY PROPERTY FOLLOW_BOT_DOCS_INSTALLED)
+  if(NOT docs_installed)  # once per package
     install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
-    set_property(DIRECTORY PROPERTY FOLLOW_BOT_README_INSTALLED TRUE)
+    install(DIRECTORY ${PROJECT_SOURCE_DIR}/doc DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
+    set_property(DIRECTORY PROPERTY FOLLOW_BOT_DOCS_INSTALLED TRUE)
   endif()
 endfunction()
 

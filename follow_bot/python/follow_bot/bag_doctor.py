@@ -852,7 +852,7 @@ def parse_args(argv):
         prog="rosrun follow_bot inspect",
         description=__doc__.split("\n\n", 1)[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="Needs no ROS master. Manual: follow_bot/README.md, 'On a real robot'.",
+        epilog="Needs no ROS master. Manual: follow_bot/doc/robot.md, 'On a real robot'.",
     )
     parser.add_argument("bag", type=Path, help="the recording (.bag)")
     parser.add_argument("--behaviour", choices=BEHAVIOURS, default="follower")

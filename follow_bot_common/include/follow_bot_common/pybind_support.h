@@ -2,7 +2,7 @@
 // python/ directories): numpy frames as cv::Mat views, configs as keyword constructors checked by
 // the C++ validate(), results with a field-listing repr. Include only from a pybind11 module.
 //
-// Conventions (follow_bot/README.md, "From Python"):
+// Conventions (follow_bot/doc/python.md, "From Python"):
 //  * frames are numpy uint8 arrays, HxWx3 BGR or HxW grey; the C++ code reads them in place
 //    through a cv::Mat header (rows may be strided, e.g. a crop `frame[200:, 100:540]`; pixels
 //    within a row must be packed). Anything else raises TypeError (dtype) or ValueError (shape,

@@ -2,5 +2,5 @@
 matching and stitching.
 
 `core` is a compiled module (pybind11) over the same C++ functions the nodes and the `stitch`
-command run; see the "From Python" section of follow_bot/README.md.
+command run; see the manual follow_bot/doc/python.md ("From Python").
 """

@@ -33,9 +33,10 @@ inline bool helpAsked(int argc, char** argv) {
   return false;
 }
 
-// Prints `rosrun package node`'s usage, `help`, and the README that documents every ~param
-// (found through rospack, so it is the source tree's in a devel space and the installed copy
-// otherwise). Returns the exit code, 0.
+// Prints `rosrun package node`'s usage, `help`, and the node's manual, doc/<node>.md of its
+// package, which documents every ~param (found through rospack, so it is the source tree's in a
+// devel space and the installed copy otherwise; add_behaviour_node installs it). Returns the exit
+// code, 0.
 inline int printHelp(const std::string& package, const std::string& node, const NodeHelp& help) {
   std::size_t name_width = 0, type_width = 0;
   for (const TopicHelp& topic : help.topics) {
@@ -55,8 +56,8 @@ inline int printHelp(const std::string& package, const std::string& node, const 
   const std::string package_path = ros::package::getPath(package);
   std::cout << "\nparameters (~PARAM, set with _PARAM:=VALUE; each with its type, default, range "
                "and unit):\n  "
-            << (package_path.empty() ? package + "'s README.md" : package_path + "/README.md")
-            << ", section " << node << "\n"
+            << (package_path.empty() ? package + "'s " : package_path + "/") << "doc/" << node
+            << ".md\n"
             << "  A ~param the node does not have is warned about at start-up, with the nearest "
                "name it has;\n  _strict_params:=true makes that an error.\n"
             << "\nCtrl-C or SIGTERM ends it at any time, also while it waits for the ROS master.\n";
