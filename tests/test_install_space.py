@@ -215,7 +215,7 @@ def test_product_runs_without_harness(tmp_path):
     """The product packages alone (no harness, no worlds) install, import and drive: the
     follower's launch with its robot description answers line frames with a forward Twist and
     takes the preset's camera mounting from robot_state_publisher's tf (marked full: colcon
-    builds every product package, several minutes)."""
+    builds every product package, ~8 min on 2 shared cores; the rest takes ~10 s)."""
     install = colcon_install(tmp_path, PRODUCT)
     installed = installed_env(install, tmp_path)
     assert sorted(p.name for p in install.iterdir() if p.is_dir()) == sorted(PRODUCT)
