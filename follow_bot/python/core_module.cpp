@@ -25,6 +25,7 @@
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/steering_law.h"
 #include "follow_bot/tag_detector.h"
+#include "follow_bot_common/CameraDefaults.h"
 #include "follow_bot_common/camera_mounting.h"
 #include "follow_bot_common/frame_watchdog.h"
 #include "follow_bot_common/ground_projection.h"
@@ -377,6 +378,10 @@ void bindGeometry(py::module_& m) {
         "Whether two cameras' intrinsics (and lens) agree.");
   m.def("describe_mounting", &describeMounting, "camera"_a, "The mounting in words, for logs.");
   m.attr("WAITING_FOR_MOUNTING") = kWaitingForMountingState;
+  // The mounting source's ~param defaults (cfg/Camera.cfg; the camera_* ones are CameraGeometry's).
+  m.attr("CAMERA_DEFAULTS") = py::dict("camera_mounting"_a = CameraDefaults::camera_mounting,
+                                       "base_frame"_a = CameraDefaults::base_frame,
+                                       "mounting_timeout"_a = CameraDefaults::mounting_timeout);
 }
 
 void bindBeaconController(py::module_& m) {

@@ -16,6 +16,7 @@
 #include <opencv2/core.hpp>
 
 #include "follow_bot/BeaconChaserDefaults.h"
+#include "follow_bot/BeaconTargetDefaults.h"
 #include "follow_bot/colour_blobs.h"
 #include "follow_bot/common.h"
 #include "follow_bot_common/config_fields.h"
@@ -40,13 +41,12 @@ inline std::optional<BeaconShape> parseBeaconShape(std::string_view name) {
 inline const char* toString(BeaconShape shape) { return nameIn(kBeaconShapeNames, shape); }
 
 struct BeaconObject {
-  BeaconShape shape = BeaconShape::kBox;
-  // Sphere: its radius. Box: the width of the face toward the camera. Default: the dumpster
-  // world's 1.8 m wide box.
-  double size_m = 1.8;
-  // Box only: how far its footprint reaches behind that face (the dumpster's 1.0 m), to aim at
-  // its centre (boxCentre).
-  double depth_m = 1.0;
+  // Defaults from cfg/BeaconTarget.cfg (the ~target_* parameters): the dumpster world's box.
+  BeaconShape shape = *parseBeaconShape(BeaconTargetDefaults::target_shape);
+  // Sphere: its radius. Box: the width of the face toward the camera.
+  double size_m = BeaconTargetDefaults::target_size;
+  // Box only: how far its footprint reaches behind that face, to aim at its centre (boxCentre).
+  double depth_m = BeaconTargetDefaults::target_depth;
 };
 
 // Empty when the object is usable, otherwise a message naming the first bad field.

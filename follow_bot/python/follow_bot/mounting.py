@@ -3,16 +3,11 @@
 (follow_bot_common/ros/camera_mounting_source.h), so a Python node on a robot sees its camera
 where the C++ nodes do.
 
-~params:
-  ~camera_mounting   tf (default): ~base_frame <- the frame's header.frame_id, looked up for
-                     every frame (a changed description is followed); params: the three below
-  ~base_frame        the robot frame, default base_link; its height above the floor is its
-                     height above base_footprint (REP 120) when tf knows that frame, else 0
-  ~mounting_timeout  s > 0, default 5: with tf, how long (wall time) the first frames wait for
-                     the transform, the node holding still, before the ~params are used instead;
-                     a transform that comes later still replaces them
-  ~camera_height, ~camera_pitch_deg (down positive), ~camera_x_offset: m, deg, m; defaults: the
-                     core's (core.CameraGeometry)
+~params (declared, with their defaults, in follow_bot_common/cfg/Camera.cfg): ~camera_mounting
+(tf: ~base_frame <- the frame's header.frame_id, looked up for every frame; params: the three
+camera_* ones), ~base_frame, ~mounting_timeout (wall time the first frames wait for tf, the node
+holding still, before the camera_* ~params are used; a transform that comes later still replaces
+them), ~camera_height, ~camera_pitch_deg, ~camera_x_offset.
 """
 
 import math
@@ -25,14 +20,17 @@ import tf2_ros
 from follow_bot import core
 
 FOOTPRINT_FRAME = "base_footprint"
-DEFAULT_TIMEOUT_S = 5.0
+DEFAULTS = core.CAMERA_DEFAULTS  # follow_bot_common/cfg/Camera.cfg's
+MOUNTING = core.CameraGeometry()  # the camera_* ~params' defaults
 HELP = {
-    "camera_mounting": "tf (default: the robot description) or params (the three below)",
-    "base_frame": "robot frame the camera is looked up in (base_link)",
-    "mounting_timeout": f"s the first frames wait for tf, then the ~params ({DEFAULT_TIMEOUT_S:g})",
-    "camera_height": "optical centre above the floor, m (default: the C++ nodes' one)",
-    "camera_pitch_deg": "camera pitch, deg, down positive (default: the C++ nodes' one)",
-    "camera_x_offset": "optical centre forward of base_link, m (default: the C++ nodes' one)",
+    "camera_mounting": f"tf (the robot description) or params (the three below) "
+    f"({DEFAULTS['camera_mounting']})",
+    "base_frame": f"robot frame the camera is looked up in ({DEFAULTS['base_frame']})",
+    "mounting_timeout": f"s the first frames wait for tf, then the ~params "
+    f"({DEFAULTS['mounting_timeout']:g})",
+    "camera_height": f"optical centre above the floor, m ({MOUNTING.height_m:g})",
+    "camera_pitch_deg": f"camera pitch, deg, down positive ({math.degrees(MOUNTING.pitch_rad):g})",
+    "camera_x_offset": f"optical centre forward of the base frame, m ({MOUNTING.x_offset_m:g})",
 }
 
 
@@ -54,25 +52,24 @@ class CameraMounting:
 
     def __init__(self):
         self.name = rospy.get_name()
-        default = core.CameraGeometry()
-        pitch_deg = rospy.get_param("~camera_pitch_deg", math.degrees(default.pitch_rad))
+        pitch_deg = rospy.get_param("~camera_pitch_deg", math.degrees(MOUNTING.pitch_rad))
         try:
             self.fallback = core.CameraGeometry(
-                height_m=rospy.get_param("~camera_height", default.height_m),
+                height_m=rospy.get_param("~camera_height", MOUNTING.height_m),
                 pitch_rad=math.radians(pitch_deg),
-                x_offset_m=rospy.get_param("~camera_x_offset", default.x_offset_m),
+                x_offset_m=rospy.get_param("~camera_x_offset", MOUNTING.x_offset_m),
             )
         except (ValueError, TypeError) as error:
             names = "~camera_height, ~camera_pitch_deg, ~camera_x_offset"
             fatal(f"invalid parameter ({names}): {error}")
-        source = rospy.get_param("~camera_mounting", "tf")
+        source = rospy.get_param("~camera_mounting", DEFAULTS["camera_mounting"])
         if source not in ("tf", "params"):
             fatal(f"~camera_mounting must be 'tf' or 'params', got {source!r}")
         self.use_tf = source == "tf"
-        self.base_frame = rospy.get_param("~base_frame", "base_link")
+        self.base_frame = rospy.get_param("~base_frame", DEFAULTS["base_frame"])
         if not isinstance(self.base_frame, str) or not self.base_frame:
             fatal(f"~base_frame must be a frame name, got {self.base_frame!r}")
-        self.timeout_s = rospy.get_param("~mounting_timeout", DEFAULT_TIMEOUT_S)
+        self.timeout_s = rospy.get_param("~mounting_timeout", DEFAULTS["mounting_timeout"])
         if not (isinstance(self.timeout_s, int | float) and self.timeout_s > 0):
             fatal(f"~mounting_timeout must be > 0, got {self.timeout_s!r}")
         self.mounting = None  # the one in use, once known

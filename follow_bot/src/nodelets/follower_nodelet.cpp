@@ -13,6 +13,7 @@
 #include <nav_msgs/Odometry.h>
 
 #include "follow_bot/FollowerConfig.h"
+#include "follow_bot/FollowerStartupDefaults.h"
 #include "follow_bot/common.h"
 #include "follow_bot/latency_estimator.h"
 #include "follow_bot/line_path.h"
@@ -42,7 +43,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   void setup(ros::NodeHandle& nh, ros::NodeHandle& pnh, const FollowerConfig& /*config*/) override {
     // On by default: every real base publishes odom and lags its commands by 50-150 ms, which
     // the commands alone cannot tell path mode's memory.
-    use_odom_ = param(pnh, "use_odom", true);
+    use_odom_ = param(pnh, "use_odom", FollowerStartupDefaults::use_odom);
     if (use_odom_) {
       odom_sub_ = subscribe<nav_msgs::Odometry>(nh, "odom", [this](const nav_msgs::Odometry& odom) {
         odom_twist_ = Twist2D{odom.twist.twist.linear.x, odom.twist.twist.angular.z};
@@ -171,7 +172,7 @@ class FollowerNodelet : public BehaviourNodelet<FollowerConfig> {
   LineMeasurement seen_;  // the last frame's
   bool placement_reported_ = false;
   Twist2D last_command_;  // what the robot was told to do since the previous frame
-  bool use_odom_ = true;
+  bool use_odom_ = FollowerStartupDefaults::use_odom;
   std::optional<double> first_path_stamp_;
   bool odom_absence_said_ = false;
   bool has_odom_ = false;

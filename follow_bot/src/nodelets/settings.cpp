@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "follow_bot/BeaconTargetDefaults.h"
 #include "follow_bot/common.h"
 #include "follow_bot/sign_detector.h"
 #include "follow_bot/tag_detector.h"
@@ -86,9 +87,9 @@ BeaconChaserSettings beaconChaserSettings(const BeaconChaserConfig& cfg,
 
 BeaconControllerConfig beaconStartupConfig(const ros::NodeHandle& pnh) {
   BeaconControllerConfig controller;
-  controller.target.shape =
-      parseChoice("target_shape", param<std::string>(pnh, "target_shape", "box"), parseBeaconShape,
-                  "'box' or 'sphere'");
+  controller.target.shape = parseChoice(
+      "target_shape", param<std::string>(pnh, "target_shape", BeaconTargetDefaults::target_shape),
+      parseBeaconShape, "'box' or 'sphere'");
   controller.target.size_m = positiveParam(pnh, "target_size", controller.target.size_m);
   controller.target.depth_m = positiveParam(pnh, "target_depth", controller.target.depth_m);
   return controller;

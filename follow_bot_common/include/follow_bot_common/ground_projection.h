@@ -12,6 +12,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "follow_bot_common/CameraDefaults.h"
+
 namespace follow_bot_common {
 
 // The lens between the scene and a raw (unrectified) image, CameraInfo's K, D and R: what maps a
@@ -30,9 +32,11 @@ struct CameraGeometry {
   double fy = 554.256;
   double cx = 320.0;
   double cy = 240.0;
-  double height_m = 0.30;                                    // optical centre above the floor
-  double pitch_rad = 20.0 * 3.14159265358979323846 / 180.0;  // positive tilts the axis down
-  double x_offset_m = 0.0;                                   // optical centre forward of base_link
+  // The mounting: defaults from cfg/Camera.cfg (the ~params that set it without tf).
+  double height_m = CameraDefaults::camera_height;  // optical centre above the floor
+  double pitch_rad =                                // positive tilts the axis down
+      CameraDefaults::camera_pitch_deg * 3.14159265358979323846 / 180.0;
+  double x_offset_m = CameraDefaults::camera_x_offset;  // optical centre forward of base_link
   // Frames come through this lens (image_raw of a distorting camera): pixels are rectified with
   // rectifyPixels before any geometry. None: the frames are rectified (or the lens is a pinhole).
   std::optional<CameraLens> lens;

@@ -10,6 +10,7 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
+#include "follow_bot_common/CameraDefaults.h"
 #include "follow_bot_common/camera_mounting.h"
 #include "follow_bot_common/ros/params.h"
 
@@ -46,14 +47,15 @@ std::shared_ptr<SharedTfListener> sharedTfListener(const ros::NodeHandle& nh) {
 CameraMountingSource::CameraMountingSource(ros::NodeHandle& nh, const ros::NodeHandle& pnh,
                                            CameraGeometry fallback, std::string name)
     : name_(std::move(name)), fallback_(std::move(fallback)) {
-  const std::string source = param<std::string>(pnh, "camera_mounting", "tf");
+  const std::string source =
+      param<std::string>(pnh, "camera_mounting", CameraDefaults::camera_mounting);
   if (source != "tf" && source != "params") {
     throw std::invalid_argument("~camera_mounting must be 'tf' or 'params', got '" + source + "'");
   }
   use_tf_ = source == "tf";
-  base_frame_ = param<std::string>(pnh, "base_frame", "base_link");
+  base_frame_ = param<std::string>(pnh, "base_frame", CameraDefaults::base_frame);
   if (base_frame_.empty()) throw std::invalid_argument("~base_frame must not be empty");
-  timeout_s_ = positiveParam(pnh, "mounting_timeout", kDefaultTimeoutS);
+  timeout_s_ = positiveParam(pnh, "mounting_timeout", CameraDefaults::mounting_timeout);
   if (use_tf_) tf_ = sharedTfListener(nh);
 }
 

@@ -19,6 +19,7 @@
 #include <sensor_msgs/Image.h>
 #include <boost/thread/recursive_mutex.hpp>
 
+#include "follow_bot_common/CameraDefaults.h"
 #include "follow_bot_common/camera_mounting.h"
 #include "follow_bot_common/ground_projection.h"
 #include "follow_bot_common/ros/camera_input.h"
@@ -218,8 +219,8 @@ class BehaviourNodelet : public CheckedNodelet {
           output_->cameraInfoHandled(usable);
         });
     camera_info_topic_ = camera_info_sub_.getTopic();
-    intrinsics_ = std::make_unique<IntrinsicsSource>(param(pnh, "image_rectified", false),
-                                                     camera_info_topic_);
+    intrinsics_ = std::make_unique<IntrinsicsSource>(
+        param(pnh, "image_rectified", CameraDefaults::image_rectified), camera_info_topic_);
     // ~image_transport (e.g. compressed) read from this nodelet's private namespace, also when
     // it runs in a manager. The base name is resolved first so that a remapping of it also moves
     // the transport's topic (<base>/compressed): image_transport appends to the name as given.

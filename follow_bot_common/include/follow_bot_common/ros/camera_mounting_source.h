@@ -33,7 +33,6 @@ class CameraMountingSource {
  public:
   // The floor frame of REP 120, for base_frame's height above the floor.
   static constexpr const char* kFootprintFrame = "base_footprint";
-  static constexpr double kDefaultTimeoutS = 5.0;
 
   // Reads the ~params above from `pnh`; `fallback` is the mounting the ~params give. Throws
   // std::invalid_argument naming a bad ~param. `name` prefixes the log messages.
@@ -58,7 +57,7 @@ class CameraMountingSource {
   const std::string name_;
   bool use_tf_ = true;
   std::string base_frame_;
-  double timeout_s_ = kDefaultTimeoutS;
+  double timeout_s_ = 0.0;
   CameraGeometry fallback_;
   std::shared_ptr<SharedTfListener> tf_;  // the process's for this node's tf topics
   std::optional<std::chrono::steady_clock::time_point> waiting_since_;
