@@ -47,7 +47,8 @@ lint: nodes
 format: deps
 	tools/lint.sh --fix
 
-# Rewrites the README parameter tables from the .cfg files (tests/test_param_tables.py checks them).
+# Rewrites the README parameter tables from the .cfg files (tests/repo/test_param_tables.py
+# checks them).
 docs:
 	/usr/bin/python3 tools/param_tables.py --write
 
