@@ -15,16 +15,20 @@ def pinned(name: str) -> str:
     raise AssertionError(f"{name} is not pinned in {REQUIREMENTS}")
 
 
+def fresh_interpreter(code: str) -> str:
+    """What `code` prints, run by a fresh harness interpreter: nothing pytest imported first can
+    hide a second copy of a module."""
+    return subprocess.run(
+        [sys.executable, "-c", code], check=True, capture_output=True, text=True
+    ).stdout
+
+
 def test_numpy_and_cv2_come_from_the_venv_alongside_rospy():
-    # A fresh interpreter, so that nothing pytest imported first can hide a second copy.
-    probe = (
+    lines = fresh_interpreter(
         "import rospy, sensor_msgs.msg, numpy, cv2, matplotlib, sys;"
         "print(numpy.__file__); print(cv2.__file__); print(numpy.__version__);"
         "print(cv2.__version__); print(sys.prefix)"
-    )
-    lines = subprocess.run(
-        [sys.executable, "-c", probe], check=True, capture_output=True, text=True
-    ).stdout.split()
+    ).split()
     numpy_file, cv2_file, numpy_version, cv2_version, prefix = lines
     assert numpy_file.startswith(prefix), numpy_file
     assert cv2_file.startswith(prefix), cv2_file
@@ -33,27 +37,21 @@ def test_numpy_and_cv2_come_from_the_venv_alongside_rospy():
 
 
 def test_only_one_numpy_is_loaded_after_importing_ros_messages():
-    probe = (
+    out = fresh_interpreter(
         "import rospy, sensor_msgs.msg, nav_msgs.msg, numpy, cv2, sys;"
         "print(sorted({m.__file__.split('/numpy/')[0] for n, m in sys.modules.items()"
         " if n.split('.')[0] == 'numpy' and getattr(m, '__file__', None)}))"
     )
-    out = subprocess.run(
-        [sys.executable, "-c", probe], check=True, capture_output=True, text=True
-    ).stdout
     assert out.count("'") == 2, f"more than one numpy location loaded: {out}"
 
 
 def test_matplotlib_and_its_toolkits_are_one_installation():
     # Two copies (pip's in the venv, Debian's python3-matplotlib) mix: Debian's mpl_toolkits is a
     # regular package and wins over pip's namespace one, and matplotlib warns on every import.
-    probe = (
+    lines = fresh_interpreter(
         "import warnings; warnings.simplefilter('error');"
         "import matplotlib, mpl_toolkits.mplot3d, os;"
         "print(os.path.dirname(os.path.dirname(matplotlib.__file__)));"
         "print(os.path.dirname(list(mpl_toolkits.__path__)[0]))"
-    )
-    lines = subprocess.run(
-        [sys.executable, "-c", probe], check=True, capture_output=True, text=True
-    ).stdout.split()
+    ).split()
     assert lines[0] == lines[1], lines
