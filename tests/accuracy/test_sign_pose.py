@@ -116,6 +116,14 @@ def print_table(title, rows):
         )
 
 
+def assert_found_within_bounds(cases: list, rows: list[dict]) -> None:
+    """Each case's row (in order): the sign found, within 1 cm and within its angle bound."""
+    for case, r in zip(cases, rows, strict=True):
+        assert r["seen"]["found"], case
+        assert r["position_error"] < 0.01, (case, r["position_error"])
+        assert r["angle_error"] < r["bound"], (case, r["angle_error"])
+
+
 # (distance along the sign's normal, lateral offset, heading offset deg): 0.5-3 m, straight on,
 # off to either side (incidence up to ~45 deg) and with the sign off the image centre.
 VIEWS = [
@@ -144,10 +152,7 @@ def test_sign_pose_on_harness_frames(frames, request, tmp_path):
     poses = [facing(sign, *v) for v in VIEWS]
     rows = measure(scene, tmp_path, poses, independent=True)
     print_table("views (fresh detector per frame)", rows)
-    for view, r in zip(VIEWS, rows, strict=True):
-        assert r["seen"]["found"], view
-        assert r["position_error"] < 0.01, (view, r["position_error"])
-        assert r["angle_error"] < r["bound"], (view, r["angle_error"])
+    assert_found_within_bounds(VIEWS, rows)
     # Mean position error, measured 0.7 mm on pinhole frames and 1.0 mm through the lens (3.9 mm
     # while the sign was aligned on the raw frame, up to 6.5 mm at 0.9-2 m).
     assert np.mean([r["position_error"] for r in rows]) < 0.002
@@ -162,10 +167,7 @@ def test_no_flips_over_a_fronto_parallel_sweep(scene, tmp_path):
     poses += [facing(sign, d, 0.15, look_at=False) for d in np.arange(0.5, 3.01, 0.25)]
     rows = measure(scene, tmp_path, poses, independent=False)
     print_table("fronto-parallel sweep (one detector)", rows)
-    for pose, r in zip(poses, rows, strict=True):
-        assert r["seen"]["found"], pose
-        assert r["position_error"] < 0.01, (pose, r["position_error"])
-        assert r["angle_error"] < r["bound"], (pose, r["angle_error"])
+    assert_found_within_bounds(poses, rows)
 
 
 def test_found_from_every_scenario_start_with_the_sign_in_view(scene, tmp_path):
