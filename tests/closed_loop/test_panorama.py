@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
 import sys
 import time
 
@@ -17,7 +16,7 @@ import cv2
 import numpy as np
 import pytest
 
-from harness.processes import private_master, stop
+from harness.processes import launch_with_client
 from harness.testing import REPO
 from harness.world import Sphere
 from harness.world_file import load_world
@@ -55,20 +54,10 @@ def client(out_png: str) -> None:
 @pytest.fixture(scope="module")
 def capture(tmp_path_factory) -> tuple[dict, np.ndarray | None]:
     out_png = tmp_path_factory.mktemp("panorama") / "panorama.png"
-    with private_master(roscore=True) as env:
-        launch = subprocess.Popen(
-            ["roslaunch", "harness", "panorama.launch"],
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
-        )  # fmt: skip
-        try:
-            done = subprocess.run(
-                [sys.executable, __file__, "--client", str(out_png)],
-                env=env, capture_output=True, text=True, timeout=120,
-            )  # fmt: skip
-        finally:
-            stop(launch)
-    assert done.returncode == 0, done.stdout + done.stderr
-    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result = launch_with_client(
+        ["harness", "panorama.launch"], [sys.executable, __file__, "--client", str(out_png)],
+        timeout=120, roscore=True,
+    )  # fmt: skip
     return result, cv2.imread(str(out_png)) if result["success"] else None
 
 

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 import yaml
 
-from harness.processes import private_master, stop
+from harness.processes import launch_with_client
 from harness.robot_description import BASE_LINK_HEIGHT, urdf
 from harness.world_file import load_world, resolve_world_path
 
@@ -69,20 +69,10 @@ def mounted_world(tmp_path: Path) -> Path:
 def test_tf_from_the_launch_equals_the_worlds_camera(which, tmp_path):
     world_path = resolve_world_path("course") if which == "course" else mounted_world(tmp_path)
     camera = load_world(world_path).camera
-    with private_master() as env:
-        launch = subprocess.Popen(
-            ["roslaunch", "harness", "course.launch", f"world:={world_path}", "duration:=0"],
-            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
-        )  # fmt: skip
-        try:
-            done = subprocess.run(
-                [sys.executable, __file__, "--client"],
-                env=env, capture_output=True, text=True, timeout=90,
-            )  # fmt: skip
-        finally:
-            stop(launch)
-    assert done.returncode == 0, done.stdout + done.stderr
-    seen = json.loads(done.stdout.strip().splitlines()[-1])
+    seen = launch_with_client(
+        ["harness", "course.launch", f"world:={world_path}", "duration:=0"],
+        [sys.executable, __file__, "--client"], timeout=90,
+    )  # fmt: skip
     on_floor = seen["base_footprint"]
     expected = [camera.x_offset_m, 0.0, camera.height_m]
     assert on_floor["xyz"] == pytest.approx(expected, abs=1e-6)
