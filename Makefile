@@ -48,7 +48,7 @@ format: deps
 	tools/lint.sh --fix
 
 # Rewrites the parameter tables of the READMEs and manuals (doc/*.md) from the .cfg files
-# (tests/test_param_tables.py checks them).
+# (tests/repo/test_param_tables.py checks them).
 docs:
 	/usr/bin/python3 tools/param_tables.py --write
 

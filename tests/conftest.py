@@ -9,6 +9,8 @@ from pathlib import Path
 import cv2
 import pytest
 
+from harness.testing import REPO
+
 # The suites run side by side on every core (tools/run_tests.sh): OpenCV's worker threads in a
 # test process would only contend for them. The pixels are the same either way.
 cv2.setNumThreads(1)
@@ -24,7 +26,7 @@ def pytest_terminal_summary(terminalreporter):
 
 # Real robot-camera frames that are not ours to ship (../shared/realdata/README.md): tests read
 # them when the folder is beside the repository and skip, saying why once, when it is not.
-REALDATA = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
+REALDATA = REPO.parent / "shared" / "realdata"
 
 
 @pytest.fixture(scope="session")

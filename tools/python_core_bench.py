@@ -42,32 +42,31 @@ def course_frames() -> list[np.ndarray]:
     return [renderer.render(pose, frame=i) for i, pose in enumerate(poses)]
 
 
-def tag_frames() -> list[np.ndarray]:
-    """The parking tag from 0.6 to 3 m, up to 30 deg off its normal (the default config's tag)."""
-    world = load_world(WORLDS_DIR / "parking.yaml")
-    renderer = Renderer(world)
-    x, y, _, yaw = world.objects[0].pose
+def facing_views(renderer: Renderer, target, distances, off_deg: float) -> list[np.ndarray]:
+    """Grey frames of `target` (a world object) looked at from `distances` (m), up to `off_deg`
+    off its normal."""
+    x, y, _, yaw = target.pose
     frames = []
-    for i, distance in enumerate(np.linspace(0.6, 3.0, 10)):
-        a = yaw + math.radians(30.0 * math.sin(i))
+    for i, distance in enumerate(distances):
+        a = yaw + math.radians(off_deg * math.sin(i))
         rx, ry = x + distance * math.cos(a), y + distance * math.sin(a)
         bgr = renderer.render((rx, ry, math.atan2(y - ry, x - rx)), frame=i)
         frames.append(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY))
     return frames
 
 
+def tag_frames() -> list[np.ndarray]:
+    """The parking tag from 0.6 to 3 m, up to 30 deg off its normal (the default config's tag)."""
+    world = load_world(WORLDS_DIR / "parking.yaml")
+    return facing_views(Renderer(world), world.objects[0], np.linspace(0.6, 3.0, 10), 30.0)
+
+
 def sign_frames():
     """The parking sign from 0.8 to 2.5 m, up to 25 deg off its normal; the sign's world."""
     world = load_world(WORLDS_DIR / "parking_sign.yaml")
     renderer = Renderer(world, noise_sigma=2.0, seed=1)
-    x, y, _, yaw = world.objects[0].pose
-    frames = []
-    for i, distance in enumerate(np.linspace(0.8, 2.5, 6)):
-        a = yaw + math.radians(25.0 * math.sin(i))
-        rx, ry = x + distance * math.cos(a), y + distance * math.sin(a)
-        bgr = renderer.render((rx, ry, math.atan2(y - ry, x - rx)), frame=i)
-        frames.append(cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY))
-    return world.objects[0], frames
+    sign = world.objects[0]
+    return sign, facing_views(renderer, sign, np.linspace(0.8, 2.5, 6), 25.0)
 
 
 def time_calls(call, frames, calls: int) -> float:

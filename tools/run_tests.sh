@@ -21,7 +21,8 @@ echo "== gtest + rostest (catkin run_tests, in the background; log: build/run_te
 make -C "$build/catkin" --no-print-directory run_tests >"$build/run_tests.log" 2>&1 &
 catkin_tests=$!
 
-# FULL=1 (make test-full) also plays the scenario runs marked `full` (tests/test_scenarios.py).
+# FULL=1 (make test-full) also plays the scenario runs marked `full`
+# (tests/closed_loop/test_scenarios.py).
 select=(-m "not full")
 [ "${FULL:-0}" = 1 ] && select=()
 # One pytest-xdist worker per core, a whole file per worker: a file's module and session

@@ -1,4 +1,4 @@
-// The C++ side of tests/test_python_core.py: runs a default-configured LineDetector,
+// The C++ side of tests/bindings/test_python_core.py: runs a default-configured LineDetector,
 // ColourBlobDetector, steering law (on the LineDetector's measurements) or parking servo (on a
 // TagDetector's observations) over image files in order and prints one JSON line per frame with
 // every result field, doubles at 17 significant digits (exact), so the test can compare

@@ -1,8 +1,9 @@
 // Runs a marker detector (the parking sign or an AprilTag) over image files and prints one JSON
 // line per frame: whether the marker was found, its pose in the camera optical frame, its corners
-// and the detection time (wall and process CPU, ms). Used by tests/test_sign_pose.py and
-// tests/test_tag_pose_accuracy.py to check poses on frames rendered by the harness; its poses,
-// corners and quality are exact (17 significant digits) for tests/test_python_core.py.
+// and the detection time (wall and process CPU, ms). Used by tests/accuracy/test_sign_pose.py and
+// tests/accuracy/test_tag_pose_accuracy.py to check poses on frames rendered by the harness; its
+// poses, corners and quality are exact (17 significant digits) for
+// tests/bindings/test_python_core.py.
 //
 //   marker_probe (--sign IMAGE --width W | --tag-size S [--tag-id N] [--tag-family F])
 //                [--fx F --fy F --cx C --cy C] [--distortion K1,K2,P1,P2,K3] [--independent]

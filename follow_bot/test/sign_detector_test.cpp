@@ -134,7 +134,8 @@ cv::Matx33d mirrorPose(const cv::Mat& reference, const CameraGeometry& camera,
 // pose than its mirror, and within the observable bound of its range or 0.5 deg of a fresh
 // search's angle, whichever is larger. When the alignment solved in floats, a tracked frame kept
 // most of the last frame's tilt and was 3.6 deg off at 3 m with some CPUs' SIMD kernels.
-// tests/test_sign_sweep_cpus.py runs this under four instruction sets and compares the lines.
+// tests/accuracy/test_sign_sweep_cpus.py runs this under four instruction sets and compares
+// the lines.
 TEST_F(SignDetectorTest, NoFlipsOverAFrontoParallelSweep) {
   SignDetector detector(config());
   int frames = 0;

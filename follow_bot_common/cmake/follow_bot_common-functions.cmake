@@ -67,7 +67,7 @@ endfunction()
 # Python path next to the package catkin_python_setup() makes (python/<package>, ../setup.py),
 # so `from <package> import core` works after sourcing devel/ or install/; installed. Also the
 # executable core_reference (target <package>_core_reference, from core_reference.cpp): the C++ results
-# tests/test_python_core.py compares the module's with, on the same image files.
+# tests/bindings/test_python_core.py compares the module's with, on the same image files.
 # The interpreter catkin builds for (the Makefile passes /usr/bin/python3), with its headers
 # (python3-dev). Found as Python3: a dependency's CMake (ament_cmake_core's python.cmake) already
 # runs find_package(Python3), which puts Debian's pybind11 in its FindPython mode anyway.

@@ -1,7 +1,7 @@
-// The C++ side of tests/test_python_core.py for image_converter.core: runs the overlay, pair
-// matching or stitching on image files and prints one JSON line with every result field, doubles
-// at 17 significant digits (exact), writing any image result as PNG, so the test can compare the
-// module's results with the C++ library's bit for bit.
+// The C++ side of tests/bindings/test_python_core.py for image_converter.core: runs the overlay,
+// pair matching or stitching on image files and prints one JSON line with every result field,
+// doubles at 17 significant digits (exact), writing any image result as PNG, so the test can
+// compare the module's results with the C++ library's bit for bit.
 //
 //   core_reference --overlay IN OUT
 //   core_reference --match A B

@@ -26,8 +26,8 @@ namespace {
 
 // One tf2 buffer and listener per process for each pair of tf topics as `nh` resolves them: the
 // behaviours in one nodelet manager share one /tf subscription and cache, and a robot whose /tf
-// is remapped to its own (tests/test_two_robots.py) keeps its own. Made on first use, gone with
-// its last user.
+// is remapped to its own (tests/closed_loop/test_two_robots.py) keeps its own. Made on first use,
+// gone with its last user.
 std::shared_ptr<SharedTfListener> sharedTfListener(const ros::NodeHandle& nh) {
   static std::mutex mutex;
   static std::map<std::pair<std::string, std::string>, std::weak_ptr<SharedTfListener>> listeners;

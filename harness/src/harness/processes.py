@@ -1,7 +1,8 @@
 """Processes of a ROS graph of its own: a master on a free port (guarded against another program
 taking the port first), nodes waited for, stopped together; one node and one client script in a
-graph of their own (the rostest pattern, for pytest: the client, usually the test file itself run
-with --client, talks to the node and prints its findings as JSON on its last line of output).
+graph of their own, or a launch file and one client (the rostest pattern, for pytest: the client,
+usually the test file itself run with --client, talks to the node and prints its findings as JSON
+on its last line of output; tests/README.md).
 """
 
 from __future__ import annotations
@@ -183,6 +184,27 @@ def run_with_client(
             assert process.poll() is None, f"{' '.join(node)} died (exit {process.returncode})"
         finally:
             stop(process)
+    return client_result(done)
+
+
+def launch_with_client(
+    launch: list[str], client: list[str], timeout: float, roscore: bool = False
+) -> dict:
+    """Starts `roslaunch LAUNCH...` (on the whole core with `roscore`), runs `client` to the end,
+    stops the launch and returns the client's last line of output as JSON."""
+    with private_master(roscore=roscore) as env:
+        process = subprocess.Popen(
+            ["roslaunch", *launch], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT
+        )
+        try:
+            done = subprocess.run(client, env=env, capture_output=True, text=True, timeout=timeout)
+        finally:
+            stop(process)
+    return client_result(done)
+
+
+def client_result(done: subprocess.CompletedProcess) -> dict:
+    """A finished client's last line of output as JSON, once it has exited 0."""
     assert done.returncode == 0, done.stdout + done.stderr
     return json.loads(done.stdout.strip().splitlines()[-1])
 

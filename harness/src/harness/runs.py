@@ -15,6 +15,7 @@ import threading
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
+from typing import Any
 from xml.etree import ElementTree
 
 import numpy as np
@@ -215,17 +216,11 @@ def run_one(
     return result
 
 
-def play(
-    scenario: Scenario,
-    out: Path,
-    video: bool,
-    progress: bool = False,
-    sheet: int = 0,
-    markers: bool = False,
-) -> dict:
-    """run_one's result, or an error entry when the scenario could not be run."""
+def play(scenario: Scenario, out: Path, video: bool, **options: Any) -> dict:
+    """run_one's result (in out/<scenario name>; `options`: run_one's progress, sheet and
+    markers), or an error entry when the scenario could not be run."""
     try:
-        return run_one(scenario, out / scenario.name, video, progress, sheet, markers)
+        return run_one(scenario, out / scenario.name, video, **options)
     except (RuntimeError, subprocess.SubprocessError, ScenarioError, WorldError) as error:
         return error_entry(scenario, str(error))
 
@@ -270,7 +265,7 @@ def run_all(
     ):
         # One run at a time: its sim time too.
         futures = {
-            pool.submit(play, s, out, video, jobs == 1, sheet, markers): i
+            pool.submit(play, s, out, video, progress=jobs == 1, sheet=sheet, markers=markers): i
             for i, s in enumerate(scenarios)
         }
         for future in as_completed(futures):

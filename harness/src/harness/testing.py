@@ -1,14 +1,17 @@
-"""Fixtures for the tests that drive real nodes: the camera nodes under test and their
-parameters (NODES), the harness camera, message builders, and probe frames with the answer each
-must get.
+"""The fixtures of the tests in tests/, in one module: the source tree they read (REPO); the
+camera nodes under test and their parameters (NODES), the harness camera, message builders, and
+probe frames with the answer each must get; a ROS client stepping a behaviour in lockstep on its
+~status (Lockstep); textured scenes for stitching.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 import time
 from dataclasses import dataclass, field
 from functools import cache
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -20,6 +23,8 @@ from harness.render import Renderer
 from harness.world import package_dir
 from harness.world_file import parse_world
 
+# The source tree the tests run from and read (this file is harness/src/harness/testing.py in it).
+REPO = Path(__file__).resolve().parents[3]
 SIGN_IMAGE = package_dir("follow_bot") / "assets" / "parking_sign.png"
 SIGN_WIDTH_M = 0.40
 TAG_SIZE_M = 0.30
@@ -207,6 +212,18 @@ def probe_frame(probe: str):
     return bgr_msg(image, (now // 10**9, now % 10**9))
 
 
+def textured_scene(width: int, height: int, seed: int) -> np.ndarray:
+    """Shapes of random colour on smoothed noise: corners for ORB everywhere."""
+    rng = np.random.default_rng(seed)
+    scene = cv2.GaussianBlur(rng.integers(0, 256, (height, width, 3), dtype=np.uint8), (0, 0), 2)
+    for _ in range(width * height // 1500):
+        colour = [int(c) for c in rng.integers(0, 256, 3)]
+        x, y = int(rng.integers(0, width)), int(rng.integers(0, height))
+        w, h = (int(v) for v in rng.integers(4, 30, 2))
+        cv2.rectangle(scene, (x, y), (x + w, y + h), colour, cv2.FILLED)
+    return cv2.GaussianBlur(scene, (0, 0), 1.0)
+
+
 def expected_range(probe: str) -> float | None:
     """Marker distance the probe frame shows (fronto-parallel, centred)."""
     if probe == "tag":
@@ -214,3 +231,92 @@ def expected_range(probe: str) -> float | None:
     if probe == "sign":
         return FX * SIGN_WIDTH_M / 240
     return None
+
+
+class Lockstep:
+    """Frames to the node, its statuses and cmd_vel back, in lockstep on its ~status: publish a
+    frame, wait for its status (and for the cmd_vel that status says went out)."""
+
+    RATE = 30.0
+
+    def __init__(self, node: str, reads_camera_info: bool = True):
+        import rospy
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import Twist
+        from nav_msgs.msg import Odometry
+        from sensor_msgs.msg import CameraInfo, Image
+
+        from follow_bot_msgs.msg import BehaviourStatus
+
+        self.cond = threading.Condition()
+        self.statuses: list = []
+        self.diagnostics: dict = {}  # the node's latest "<node>: behaviour" status
+        self.twists: list[tuple[float, float, float]] = []  # (wall, linear, angular)
+        self.image_pub = rospy.Publisher("/camera/rgb/image_raw", Image, queue_size=10)
+        info_pub = rospy.Publisher("/camera/rgb/camera_info", CameraInfo, queue_size=1, latch=True)
+        odom_pub = rospy.Publisher("/odom", Odometry, queue_size=1, latch=True)
+        self.status_sub = rospy.Subscriber(f"/{node}/status", BehaviourStatus, self._on_status)
+        self.cmd_sub = rospy.Subscriber("/cmd_vel", Twist, self._on_twist)
+        self.diagnostics_name = f"{node}: behaviour"
+        rospy.Subscriber("/diagnostics", DiagnosticArray, self._on_diagnostics)
+        info_pub.publish(pinhole_info())
+        odom_pub.publish(odom_msg(0.0))
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and not (
+            self.image_pub.get_num_connections()
+            and self.status_sub.get_num_connections()
+            and self.cmd_sub.get_num_connections()
+        ):
+            time.sleep(0.05)
+        if reads_camera_info:  # a C++ behaviour: its diagnostics count the camera_info it took
+            taken = self.wait_diagnostics(lambda d: d.get("camera_info_accepted") == "1")
+            assert taken, f"the node never took the camera_info: {self.diagnostics}"
+        self.t = 1000.0  # frame stamps, s: 1/RATE apart whatever the wall clock does
+
+    def _on_status(self, msg) -> None:
+        with self.cond:
+            self.statuses.append(msg)
+            self.cond.notify_all()
+
+    def _on_diagnostics(self, array) -> None:
+        for s in array.status:
+            if s.name == self.diagnostics_name:
+                with self.cond:
+                    self.diagnostics = {"message": s.message, **{v.key: v.value for v in s.values}}
+                    self.cond.notify_all()
+
+    def wait_diagnostics(self, predicate, timeout: float = 20.0) -> bool:
+        """Whether the node's diagnostics came to satisfy `predicate` within `timeout` s."""
+        with self.cond:
+            return self.cond.wait_for(lambda: predicate(self.diagnostics), timeout)
+
+    def _on_twist(self, msg) -> None:
+        with self.cond:
+            self.twists.append((time.monotonic(), msg.linear.x, msg.angular.z))
+            self.cond.notify_all()
+
+    def frame(self, msg, wall_rate: bool = False) -> None:
+        import rospy
+
+        self.t += 1.0 / self.RATE
+        msg.header.stamp = rospy.Time.from_sec(self.t)
+        with self.cond:
+            answered, heard = len(self.statuses), len(self.twists)
+            self.image_pub.publish(msg)
+            assert self.cond.wait_for(lambda: len(self.statuses) > answered, 10.0), "no status"
+            # The frame's own cmd_vel, when its status says one went out (counted per frame: a
+            # running total would be off by any Twist sent outside a frame, e.g. ~enable's zero).
+            if self.statuses[-1].command_sent:
+                assert self.cond.wait_for(lambda: len(self.twists) > heard, 10.0), "no cmd_vel"
+        if wall_rate:
+            time.sleep(1.0 / self.RATE)
+
+    def summary(self) -> dict:
+        with self.cond:
+            return {
+                "statuses": [
+                    [s.active, s.command_sent, s.command.linear.x, s.command.angular.z, s.state]
+                    for s in self.statuses
+                ],
+                "twists": self.twists[:],
+            }
