@@ -309,7 +309,8 @@ def test_mounting_from_transform_reads_tf_as_the_nodes_do():
     level = (-0.5, 0.5, -0.5, 0.5)
     intrinsics = core.CameraGeometry(fx=400.0, fy=400.0, cx=160.0, cy=120.0)
     camera, warning = core.mounting_from_transform((0.10, 0.0, 0.28), level, 0.02, intrinsics)
-    assert (camera.height_m, camera.pitch_rad, camera.x_offset_m) == pytest.approx((0.30, 0.0, 0.10))
+    mounting = (camera.height_m, camera.pitch_rad, camera.x_offset_m)
+    assert mounting == pytest.approx((0.30, 0.0, 0.10))
     assert (camera.fx, camera.cx) == (400.0, 160.0) and warning == ""
     assert core.same_intrinsics(camera, intrinsics) and not core.same_mounting(camera, intrinsics)
     assert core.describe_mounting(camera) == "height 0.300 m, pitch 0.0 deg down, x offset 0.100 m"

@@ -132,7 +132,8 @@ node = pytest.mark.parametrize("node", NODES)
 
 def play(node: str, case: str) -> dict:
     command = NODES[node] + CASE_PARAMS[case]
-    result = run_with_client(command, [sys.executable, __file__, "--client", case, node], timeout=180)
+    client = [sys.executable, __file__, "--client", case, node]
+    result = run_with_client(command, client, timeout=180)
     print(node, case, json.dumps(result)[:2000])
     return result
 

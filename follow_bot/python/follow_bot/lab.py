@@ -91,9 +91,9 @@ class CommandOutput:
         rospy.on_shutdown(self._shutdown)
 
     def send(self, header, desired, active, state):
-        """One frame's decision, by follow_bot_common::CommandOutput::send's rules: the limiter runs on
-        every frame; the command goes out while active, and while idle until it is zero (that
-        zero included); the frame's ~status. Returns the limited command."""
+        """One frame's decision, by follow_bot_common::CommandOutput::send's rules: the limiter
+        runs on every frame; the command goes out while active, and while idle until it is zero
+        (that zero included); the frame's ~status. Returns the limited command."""
         stamp = header.stamp.to_sec() if not header.stamp.is_zero() else rospy.get_time()
         self.watchdog.frame_arrived(rospy.get_time())
         # A gap longer than the watchdog timeout counts as the timeout; a backward stamp gives
