@@ -7,14 +7,9 @@ set(FOLLOW_BOT_COMMON_CMAKE_DIR ${CMAKE_CURRENT_LIST_DIR})
 # executable NODE_NAME of the calling package, a generated main (node_main.cpp.in) that runs the
 # nodelet made by the C++ expression NODELET_FACTORY() (declared in NODELET_HEADER, linked from
 # NODELET_LIBRARY) in a process of its own and sends its final stop on shutdown; with -h or
-<<<<<<< HEAD
-# --help it prints NODE_HELP() (a follow_bot_common::NodeHelp, declared in NODELET_HEADER) and the
-# package's README.md, without a master. Installed, and the package's README.md with it.
-=======
-# --help it prints NODE_HELP() (a follow_bot::NodeHelp, declared in NODELET_HEADER) and the path
-# of the node's manual, the package's doc/NODE_NAME.md (which must exist), without a master.
-# Installed, and the package's README.md and doc/ (its manuals) with it.
->>>>>>> manuals
+# --help it prints NODE_HELP() (a follow_bot_common::NodeHelp, declared in NODELET_HEADER) and
+# the path of the node's manual, the package's doc/NODE_NAME.md (which must exist), without a
+# master. Installed, and the package's README.md and doc/ (its manuals) with it.
 # The target is NODE_NAME, or NODE_NAME_node when that is the package's own name.
 function(add_behaviour_node NODE_NAME NODELET_FACTORY NODELET_HEADER NODELET_LIBRARY NODE_HELP)
   set(target ${NODE_NAME})
