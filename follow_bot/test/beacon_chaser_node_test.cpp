@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "frame_msg.h"
+#include "node_test_main.h"
 
 namespace {
 
@@ -409,8 +410,5 @@ TEST_F(BeaconChaserNode, ReconfigureAppliesClampsOrRefusesWhole) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "beacon_chaser_node_test");
-  ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
+  return follow_bot::test::runNodeTests(argc, argv, "beacon_chaser_node_test");
 }

@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "blob_helpers.h"
+
 namespace follow_bot {
 namespace {
 
@@ -173,20 +175,11 @@ void drawSphere(cv::Mat& frame, const CameraGeometry& camera, const Pose& robot,
   }
 }
 
-// A copy, so that callers may pass a temporary result.
-ColourBlob blobOf(const BlobResult& result, const std::string& name) {
-  const ColourBlob* blob = result.find(name);
-  if (blob == nullptr) throw std::runtime_error("no colour " + name);
-  return *blob;
-}
+using test::blobOf;
 
 // The detector as an approach node configures it for a box target (settings.cpp): a box is not
 // round, so no roundness gate.
-ColourBlobConfig boxTargetDetector() {
-  ColourBlobConfig config;
-  config.roundness_tolerance = 0.0;
-  return config;
-}
+ColourBlobConfig boxTargetDetector() { return test::anyShape(); }
 
 // The ground-contact range reads whole rows, so allow 0.6 of a row's worth near `range`: the
 // row of a floor point d ahead is about cy + fy * h / d, so d changes by about

@@ -7,6 +7,9 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <stdexcept>
+#include <utility>
+
+#include "blob_helpers.h"
 
 namespace follow_bot {
 namespace {
@@ -47,19 +50,8 @@ void drawDisk(cv::Mat& frame, cv::Point2d centre, double radius, const cv::Scala
   }
 }
 
-// A copy, so that callers may pass a temporary result.
-ColourBlob blobOf(const BlobResult& result, const std::string& name) {
-  const ColourBlob* blob = result.find(name);
-  if (blob == nullptr) throw std::runtime_error("no colour " + name);
-  return *blob;
-}
-
-// Any shape: as the lab worksheet's colour steps take it.
-ColourBlobConfig anyShape() {
-  ColourBlobConfig config;
-  config.roundness_tolerance = 0.0;
-  return config;
-}
+using test::anyShape;  // as the lab worksheet's colour steps take it
+using test::blobOf;
 
 TEST(ColourNames, ParseGivesTheIssueDefaults) {
   const std::optional<ColourSpec> red = parseColourName("red");
@@ -97,43 +89,41 @@ TEST(ColourBlobConfig, DefaultIsValidAndHasThreeColours) {
 }
 
 TEST(ColourBlobConfig, ValidateNamesTheBadField) {
-  ColourBlobConfig config;
-  config.colours[1].sensitivity = 95;
-  EXPECT_EQ(validate(config), "colours[1] (green): sensitivity must be in [0, 90], got 95");
-  config = ColourBlobConfig();
-  config.colours[0].sensitivity = -1;
-  EXPECT_EQ(validate(config), "colours[0] (red): sensitivity must be in [0, 90], got -1");
-  config = ColourBlobConfig();
-  config.colours[2].hue_centre = 180;
-  EXPECT_EQ(validate(config), "colours[2] (blue): hue_centre must be in [0, 179], got 180");
-  config = ColourBlobConfig();
-  config.colours[0].s_min = 256;
-  EXPECT_EQ(validate(config), "colours[0] (red): s_min must be in [0, 255], got 256");
-  config = ColourBlobConfig();
-  config.colours[0].v_min = -5;
-  EXPECT_EQ(validate(config), "colours[0] (red): v_min must be in [0, 255], got -5");
-  config = ColourBlobConfig();
-  config.colours[2].name = "green";
-  EXPECT_EQ(validate(config), "colours[2] (green): name is a duplicate");
-  config = ColourBlobConfig();
-  config.colours[0].name = "";
-  EXPECT_EQ(validate(config), "colours[0] (): name must not be empty");
-  config = ColourBlobConfig();
-  config.colours.clear();
-  EXPECT_EQ(validate(config), "colours must name at least one colour");
-  config = ColourBlobConfig();
-  config.min_area = -1.0;
-  EXPECT_EQ(validate(config), "min_area must be >= 0, got -1");
-  config = ColourBlobConfig();
-  config.open_kernel = 4;
-  EXPECT_EQ(validate(config), "open_kernel must be 0 (off) or an odd size, got 4");
-  config = ColourBlobConfig();
-  config.close_kernel = -3;
-  EXPECT_EQ(validate(config), "close_kernel must be 0 (off) or an odd size, got -3");
-  config.close_kernel = 1;
-  EXPECT_EQ(validate(config), "");
-  config.roundness_tolerance = -0.1;
-  EXPECT_EQ(validate(config), "roundness_tolerance must be in [0, 1], got -0.1");
+  // Each case changes a default config and names what validate() says of it.
+  using Change = void (*)(ColourBlobConfig&);
+  const std::pair<Change, const char*> cases[] = {
+      {[](ColourBlobConfig& c) { c.colours[1].sensitivity = 95; },
+       "colours[1] (green): sensitivity must be in [0, 90], got 95"},
+      {[](ColourBlobConfig& c) { c.colours[0].sensitivity = -1; },
+       "colours[0] (red): sensitivity must be in [0, 90], got -1"},
+      {[](ColourBlobConfig& c) { c.colours[2].hue_centre = 180; },
+       "colours[2] (blue): hue_centre must be in [0, 179], got 180"},
+      {[](ColourBlobConfig& c) { c.colours[0].s_min = 256; },
+       "colours[0] (red): s_min must be in [0, 255], got 256"},
+      {[](ColourBlobConfig& c) { c.colours[0].v_min = -5; },
+       "colours[0] (red): v_min must be in [0, 255], got -5"},
+      {[](ColourBlobConfig& c) { c.colours[2].name = "green"; },
+       "colours[2] (green): name is a duplicate"},
+      {[](ColourBlobConfig& c) { c.colours[0].name = ""; },
+       "colours[0] (): name must not be empty"},
+      {[](ColourBlobConfig& c) { c.colours.clear(); }, "colours must name at least one colour"},
+      {[](ColourBlobConfig& c) { c.min_area = -1.0; }, "min_area must be >= 0, got -1"},
+      {[](ColourBlobConfig& c) { c.open_kernel = 4; },
+       "open_kernel must be 0 (off) or an odd size, got 4"},
+      {[](ColourBlobConfig& c) { c.close_kernel = -3; },
+       "close_kernel must be 0 (off) or an odd size, got -3"},
+      {[](ColourBlobConfig& c) { c.close_kernel = 1; }, ""},
+      {[](ColourBlobConfig& c) {
+         c.close_kernel = 1;
+         c.roundness_tolerance = -0.1;
+       },
+       "roundness_tolerance must be in [0, 1], got -0.1"},
+  };
+  for (const auto& [change, expected] : cases) {
+    ColourBlobConfig config;
+    change(config);
+    EXPECT_EQ(validate(config), expected);
+  }
 }
 
 TEST(ColourBlobDetector, ConstructorRejectsBadConfig) {

@@ -13,6 +13,7 @@
 
 #include "frame_msg.h"
 #include "node_answers.h"
+#include "node_test_main.h"
 
 namespace {
 
@@ -101,8 +102,5 @@ TEST_F(FollowerNode, StopsOnceWhenFramesStopAndThenStaysSilent) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "follower_node_test");
-  ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
+  return follow_bot::test::runNodeTests(argc, argv, "follower_node_test");
 }

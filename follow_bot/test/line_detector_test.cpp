@@ -155,13 +155,23 @@ TEST(GroundToRow, NothingForFloorNotInFrontOfTheCamera) {
   EXPECT_FALSE(groundToRow(roundCamera(0.3, 0.0), std::nan("")));
 }
 
+// Expects `band` to be rows [row_begin, row_end), clamped or not, on the floor `distance_m` ahead
+// (NaN: no floor in view).
+void expectBand(const BandPlacement& band, int row_begin, int row_end, bool clamped,
+                double distance_m) {
+  EXPECT_EQ(band.row_begin, row_begin);
+  EXPECT_EQ(band.row_end, row_end);
+  EXPECT_EQ(band.clamped, clamped);
+  if (std::isnan(distance_m)) {
+    EXPECT_TRUE(std::isnan(band.distance_m));
+  } else {
+    EXPECT_NEAR(band.distance_m, distance_m, 1e-9);
+  }
+}
+
 TEST(PlaceBand, CentresTheBandOnTheDistance) {
   // 0.5 m up, level: 2.5 m ahead is row 340, the centre of rows [330, 351).
-  const BandPlacement band = placeBand(roundCamera(0.5, 0.0), BandConfig{2.5, 21}, 480);
-  EXPECT_EQ(band.row_begin, 330);
-  EXPECT_EQ(band.row_end, 351);
-  EXPECT_FALSE(band.clamped);
-  EXPECT_NEAR(band.distance_m, 2.5, 1e-9);
+  expectBand(placeBand(roundCamera(0.5, 0.0), BandConfig{2.5, 21}, 480), 330, 351, false, 2.5);
   // An even row count: the centre 340 - 9.5 rounds to row 331 (centre 340.5, 2.4876 m).
   const BandPlacement even = placeBand(roundCamera(0.5, 0.0), BandConfig{2.5, 20}, 480);
   EXPECT_EQ(even.row_begin, 331);
@@ -171,11 +181,8 @@ TEST(PlaceBand, CentresTheBandOnTheDistance) {
 TEST(PlaceBand, ClampsBelowTheHorizonWithMargin) {
   // Level, 0.3 m up: 10 m ahead is 15 rows below the horizon, inside the 2 deg margin
   // (500 tan 2 deg = 17.46 rows), so the band starts on row 258 and sees 0.3 * 500 / 27.5 m.
-  const BandPlacement band = placeBand(roundCamera(0.3, 0.0), BandConfig{10.0, 20}, 480);
-  EXPECT_TRUE(band.clamped);
-  EXPECT_EQ(band.row_begin, 258);
-  EXPECT_EQ(band.row_end, 278);
-  EXPECT_NEAR(band.distance_m, 0.3 * 500.0 / 27.5, 1e-9);
+  expectBand(placeBand(roundCamera(0.3, 0.0), BandConfig{10.0, 20}, 480), 258, 278, true,
+             0.3 * 500.0 / 27.5);
   // Pitched 10 deg down, the horizon is 500 tan 10 deg = 88.2 rows above the centre.
   const BandPlacement pitched = placeBand(roundCamera(0.3, 10.0), BandConfig{20.0, 20}, 480);
   EXPECT_TRUE(pitched.clamped);
@@ -185,11 +192,8 @@ TEST(PlaceBand, ClampsBelowTheHorizonWithMargin) {
 
 TEST(PlaceBand, ClampsToTheBottomWhenTheFloorIsNearerThanTheCameraSees) {
   // Level, 0.2 m up: the nearest floor in view (row 479) is 0.2 * 500 / 239 = 0.42 m ahead.
-  const BandPlacement band = placeBand(roundCamera(0.2, 0.0), BandConfig{0.3, 20}, 480);
-  EXPECT_TRUE(band.clamped);
-  EXPECT_EQ(band.row_begin, 460);
-  EXPECT_EQ(band.row_end, 480);
-  EXPECT_NEAR(band.distance_m, 0.2 * 500.0 / 229.5, 1e-9);
+  expectBand(placeBand(roundCamera(0.2, 0.0), BandConfig{0.3, 20}, 480), 460, 480, true,
+             0.2 * 500.0 / 229.5);
   // Behind the camera: the bottom too.
   const BandPlacement behind = placeBand(roundCamera(0.3, 0.0, 0.1), BandConfig{0.05, 20}, 480);
   EXPECT_TRUE(behind.clamped);
@@ -198,11 +202,8 @@ TEST(PlaceBand, ClampsToTheBottomWhenTheFloorIsNearerThanTheCameraSees) {
 
 TEST(PlaceBand, BottomRowsWhenTheCameraSeesNoFloor) {
   // 30 deg up: the horizon is below the image.
-  const BandPlacement band = placeBand(roundCamera(0.3, -30.0), BandConfig{0.46, 20}, 480);
-  EXPECT_TRUE(band.clamped);
-  EXPECT_EQ(band.row_begin, 460);
-  EXPECT_EQ(band.row_end, 480);
-  EXPECT_TRUE(std::isnan(band.distance_m));
+  expectBand(placeBand(roundCamera(0.3, -30.0), BandConfig{0.46, 20}, 480), 460, 480, true,
+             std::nan(""));
 }
 
 TEST(LineDetector, PlacesTheBandForItsCamera) {

@@ -311,40 +311,43 @@ void report(const std::string& name, double speed, const Trace& run) {
               run.travelled);
 }
 
+// simulate(scenario), its errors printed under `name` (report) at the scenario's speed.
+Trace simulateAndReport(const std::string& name, const Scenario& scenario) {
+  Trace run = simulate(scenario);
+  report(name, scenario.config.max_linear, run);
+  return run;
+}
+
 TEST(PathLawClosedLoop, StraightLine) {
   Scenario scenario{Course().straight(5.0), Pose(), atSpeed(0.3)};
   scenario.pixel_noise = 0.5;
-  const Trace run = simulate(scenario);
-  report("straight, +-0.5 px", 0.3, run);
+  const Trace run = simulateAndReport("straight, +-0.5 px", scenario);
   EXPECT_TRUE(run.always_following);
   EXPECT_GT(run.travelled, 4.0);
   EXPECT_LE(run.max_error, 0.003);
 }
 
-TEST(PathLawClosedLoop, CircleOfRadius60cmAtLowSpeed) {
-  for (double noise : {0.0, 0.5}) {
-    Scenario scenario{circle(), Pose(), atSpeed(0.2)};
-    scenario.pixel_noise = noise;
-    const Trace run = simulate(scenario);
-    report(noise > 0 ? "circle, +-0.5 px" : "circle", 0.2, run);
-    EXPECT_TRUE(run.always_following);
-    EXPECT_GT(run.travelled, 4.0);
-    EXPECT_LE(run.max_error, 0.01);
-    EXPECT_LE(run.rms_error, 0.005);
-  }
-}
-
-TEST(PathLawClosedLoop, SBendAtLowSpeed) {
-  for (double noise : {0.0, 0.5}) {
-    Scenario scenario{sBend(), Pose(), atSpeed(0.2)};
-    scenario.settle = 0.3;
-    scenario.pixel_noise = noise;
-    const Trace run = simulate(scenario);
-    report(noise > 0 ? "S-bend, +-0.5 px" : "S-bend", 0.2, run);
-    EXPECT_TRUE(run.always_following);
-    EXPECT_GT(run.travelled, 3.0);
-    EXPECT_LE(run.max_error, 0.01);
-    EXPECT_LE(run.rms_error, 0.005);
+TEST(PathLawClosedLoop, CircleOfRadius60cmAndSBendAtLowSpeed) {
+  struct Case {
+    const char* name;
+    Course course;
+    double settle;
+    double min_travelled;
+  };
+  const Case cases[] = {{"circle", circle(), Scenario().settle, 4.0},
+                        {"S-bend", sBend(), 0.3, 3.0}};
+  for (const Case& c : cases) {
+    for (double noise : {0.0, 0.5}) {
+      Scenario scenario{c.course, Pose(), atSpeed(0.2)};
+      scenario.settle = c.settle;
+      scenario.pixel_noise = noise;
+      const Trace run = simulateAndReport(
+          noise > 0 ? std::string(c.name) + ", +-0.5 px" : std::string(c.name), scenario);
+      EXPECT_TRUE(run.always_following) << c.name << " " << noise;
+      EXPECT_GT(run.travelled, c.min_travelled) << c.name << " " << noise;
+      EXPECT_LE(run.max_error, 0.01) << c.name << " " << noise;
+      EXPECT_LE(run.rms_error, 0.005) << c.name << " " << noise;
+    }
   }
 }
 
@@ -353,8 +356,7 @@ TEST(PathLawClosedLoop, CircleAndSBendAtTopSpeed) {
     Scenario scenario{s_bend ? sBend() : circle(), Pose(), atSpeed(0.7)};
     scenario.settle = s_bend ? 0.3 : 1.0;
     scenario.pixel_noise = 0.5;
-    const Trace run = simulate(scenario);
-    report(s_bend ? "S-bend, +-0.5 px" : "circle, +-0.5 px", 0.7, run);
+    const Trace run = simulateAndReport(s_bend ? "S-bend, +-0.5 px" : "circle, +-0.5 px", scenario);
     EXPECT_TRUE(run.always_following);
     EXPECT_GT(run.travelled, 3.0);
     EXPECT_LE(run.max_error, 0.025);
@@ -367,8 +369,7 @@ TEST(PathLawClosedLoop, UsesTheLookAheadBandToo) {
     scenario.settle = 0.3;
     scenario.pixel_noise = 0.5;
     scenario.look_ahead = true;
-    const Trace run = simulate(scenario);
-    report("S-bend, two bands, +-0.5 px", speed, run);
+    const Trace run = simulateAndReport("S-bend, two bands, +-0.5 px", scenario);
     EXPECT_TRUE(run.always_following);
     EXPECT_GT(run.travelled, 3.0);
     EXPECT_LE(run.max_error, speed < 0.5 ? 0.01 : 0.025);
@@ -383,10 +384,10 @@ TEST(PathLawClosedLoop, ToleratesAFewPercentOfTurnRateError) {
       Scenario scenario{s_bend ? sBend() : circle(), Pose(), atSpeed(0.2)};
       scenario.settle = s_bend ? 0.3 : 1.0;
       scenario.turn_scale = turn_scale;
-      const Trace run = simulate(scenario);
-      report(std::string(s_bend ? "S-bend" : "circle") + ", turning 5 % " +
-                 (turn_scale < 1.0 ? "less" : "more"),
-             0.2, run);
+      const Trace run =
+          simulateAndReport(std::string(s_bend ? "S-bend" : "circle") + ", turning 5 % " +
+                                (turn_scale < 1.0 ? "less" : "more"),
+                            scenario);
       EXPECT_TRUE(run.always_following);
       EXPECT_LE(run.max_error, 0.015);
     }
@@ -413,8 +414,7 @@ TEST(PathLawClosedLoop, ConvergesFromAnOffsetStart) {
 TEST(PathLawClosedLoop, AcquiresTheLineThroughTheFallbackSearch) {
   Scenario scenario{Course().straight(4.0), Pose{0.0, 0.15, degrees(20.0)}, atSpeed(0.3)};
   scenario.settle = 2.0;
-  const Trace run = simulate(scenario);
-  report("acquired after a search", 0.3, run);
+  const Trace run = simulateAndReport("acquired after a search", scenario);
   EXPECT_EQ(transitions(run.states),
             (std::vector<LineState>{LineState::kSearching, LineState::kFollowing}));
   EXPECT_GT(run.travelled, 3.0);
@@ -433,8 +433,7 @@ TEST(PathLawClosedLoop, CrossesGapsInTheLine) {
       Scenario scenario{c.course, Pose(), atSpeed(speed)};
       scenario.settle = 0.5;
       scenario.pixel_noise = 0.5;
-      const Trace run = simulate(scenario);
-      report(c.name, speed, run);
+      const Trace run = simulateAndReport(c.name, scenario);
       EXPECT_TRUE(run.always_following) << c.name << " " << speed;
       EXPECT_GT(run.travelled, c.course.length() - 0.7);
       EXPECT_LT(run.max_error, 0.02) << c.name << " " << speed;
@@ -876,8 +875,7 @@ TEST(PathLawClosedLoop, BridgesWithinACurveOnTheCurvesRadius) {
   scenario.stop_before_end = 1.5;
   scenario.pixel_noise = 0.5;
   scenario.max_time = 120.0;
-  const Trace run = simulate(scenario);
-  report("course, Waffle Pi camera", 0.26, run);
+  const Trace run = simulateAndReport("course, Waffle Pi camera", scenario);
   EXPECT_GT(run.travelled, scenario.course.length() - 1.6);
   EXPECT_LE(run.max_error, 0.003);
   EXPECT_LE(run.rms_error, 0.0004);

@@ -18,6 +18,7 @@
 
 #include "frame_msg.h"
 #include "node_answers.h"
+#include "node_test_main.h"
 #include "synthetic_tag.h"
 
 namespace {
@@ -170,8 +171,5 @@ TEST_F(ParkerNode, E_StopsOnceWhenFramesStopAndThenStaysSilent) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ::testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "parker_node_test");
-  ros::NodeHandle nh;
-  return RUN_ALL_TESTS();
+  return follow_bot::test::runNodeTests(argc, argv, "parker_node_test");
 }

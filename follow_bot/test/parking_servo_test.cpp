@@ -175,11 +175,21 @@ TEST(ParkingServo, HiddenMidApproachStillParks) {
   EXPECT_NEAR(run.final_pose.y, 0.0, 0.005);
 }
 
-TEST(ParkingServo, ParkingErrorOfASquareView) {
+// A level camera facing the marker (world -x) from 0.7 m in front of it, 0.1 m to its left
+// (world +y): the marker is 0.7 m ahead and 0.1 m to the robot's left, its face toward the robot.
+class ParkingServoSquareView : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    config.camera.pitch_rad = 0.0;
+    marker = observe(Pose2D{0.7, 0.1, kPi}, config.camera);
+    ASSERT_TRUE(marker);
+  }
+
   ParkingServoConfig config;
-  config.camera.pitch_rad = 0.0;
-  const std::optional<MarkerObservation> marker = observe(Pose2D{0.7, 0.1, kPi}, config.camera);
-  ASSERT_TRUE(marker);
+  std::optional<MarkerObservation> marker;
+};
+
+TEST_F(ParkingServoSquareView, ParkingError) {
   const ParkingError error = parkingError(*marker, config.camera);
   EXPECT_NEAR(error.along, 0.7, 1e-9);
   EXPECT_NEAR(error.lateral, 0.1, 1e-9);
@@ -187,13 +197,7 @@ TEST(ParkingServo, ParkingErrorOfASquareView) {
   EXPECT_NEAR(error.bearing, std::atan2(0.1, 0.7), 1e-9);  // marker to the robot's left
 }
 
-TEST(ParkingServo, MarkerInBaseOfASquareView) {
-  ParkingServoConfig config;
-  config.camera.pitch_rad = 0.0;
-  // Facing the marker (world -x) from 0.7 m in front of it, 0.1 m to its left (world +y): the
-  // marker is 0.7 m ahead and 0.1 m to the robot's left, its face toward the robot.
-  const std::optional<MarkerObservation> marker = observe(Pose2D{0.7, 0.1, kPi}, config.camera);
-  ASSERT_TRUE(marker);
+TEST_F(ParkingServoSquareView, MarkerInBase) {
   const MarkerInBase placed = markerInBase(*marker, config.camera);
   EXPECT_NEAR(placed.centre[0], 0.7, 1e-9);
   EXPECT_NEAR(placed.centre[1], 0.1, 1e-9);

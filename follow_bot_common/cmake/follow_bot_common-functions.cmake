@@ -3,6 +3,28 @@
 # templates they use lie next to this file.
 set(FOLLOW_BOT_COMMON_CMAKE_DIR ${CMAKE_CURRENT_LIST_DIR})
 
+# follow_bot_package_defaults(): the build settings every package on follow_bot_common shares,
+# for the targets it makes after the call: a Release build unless one is asked for, and C++17.
+macro(follow_bot_package_defaults)
+  if(NOT CMAKE_BUILD_TYPE)
+    set(CMAKE_BUILD_TYPE Release)
+  endif()
+  set(CMAKE_CXX_STANDARD 17)
+  set(CMAKE_CXX_STANDARD_REQUIRED ON)
+endmacro()
+
+# add_core_library(SOURCE...): the calling package's ROS-free core, the library <package>_core of
+# the SOURCEs: linked to OpenCV, built with warnings as errors, after the generated headers of the
+# package (generate_cfg_defaults, called before) and of the packages it uses. The package links
+# the rest itself.
+function(add_core_library)
+  add_library(${PROJECT_NAME}_core ${ARGN})
+  target_link_libraries(${PROJECT_NAME}_core ${OpenCV_LIBRARIES})
+  target_compile_options(${PROJECT_NAME}_core PRIVATE -Wall -Wextra -Werror)
+  # The generated headers: its own and those of the packages it uses (follow_bot_common's).
+  add_dependencies(${PROJECT_NAME}_core ${PROJECT_NAME}_cfg_defaults ${catkin_EXPORTED_TARGETS})
+endfunction()
+
 # add_behaviour_node(NODE_NAME NODELET_FACTORY NODELET_HEADER NODELET_LIBRARY NODE_HELP): the
 # executable NODE_NAME of the calling package, a generated main (node_main.cpp.in) that runs the
 # nodelet made by the C++ expression NODELET_FACTORY() (declared in NODELET_HEADER, linked from

@@ -30,6 +30,18 @@ cv::Mat greyOrBgrView(const py::handle& image) {
   return matView(image, grey ? 1 : 3);
 }
 
+// `run` (matchPair, stitchPair) as Python calls it: on views of two images A and B (HxW grey or
+// HxWx3 BGR uint8), without the GIL while it works.
+template <class Result>
+auto onImagePair(Result (*run)(const cv::Mat&, const cv::Mat&, const MatchOptions&)) {
+  return [run](const py::handle& a, const py::handle& b, const MatchOptions& options) {
+    const cv::Mat view_a = greyOrBgrView(a);
+    const cv::Mat view_b = greyOrBgrView(b);
+    py::gil_scoped_release unlocked;
+    return run(view_a, view_b, options);
+  };
+}
+
 // Raises ValueError with the validate() message of a config changed after construction.
 template <class T>
 void check(const T& config) {
@@ -80,17 +92,9 @@ void bindMatching(py::module_& m) {
       .def_property_readonly("ok", &PairMatch::ok);
   defRepr(pair);
 
-  m.def(
-      "match_pair",
-      [](const py::handle& a, const py::handle& b, const MatchOptions& options) {
-        const cv::Mat view_a = greyOrBgrView(a);
-        const cv::Mat view_b = greyOrBgrView(b);
-        py::gil_scoped_release unlocked;
-        return matchPair(view_a, view_b, options);
-      },
-      "a"_a, "b"_a, "options"_a = MatchOptions(),
-      "Matches image B against image A (HxW grey or HxWx3 BGR uint8); never raises on bad "
-      "images, the result carries the error.");
+  m.def("match_pair", onImagePair(&matchPair), "a"_a, "b"_a, "options"_a = MatchOptions(),
+        "Matches image B against image A (HxW grey or HxWx3 BGR uint8); never raises on bad "
+        "images, the result carries the error.");
   m.def(
       "apply_homography",
       [](const py::array_t<double, py::array::forcecast>& homography,
@@ -120,16 +124,8 @@ void bindStitching(py::module_& m) {
   defRepr(result);
   m.attr("MAX_PANORAMA_SIDE") = kMaxPanoramaSide;
 
-  m.def(
-      "stitch_pair",
-      [](const py::handle& a, const py::handle& b, const MatchOptions& options) {
-        const cv::Mat view_a = greyOrBgrView(a);
-        const cv::Mat view_b = greyOrBgrView(b);
-        py::gil_scoped_release unlocked;
-        return stitchPair(view_a, view_b, options);
-      },
-      "a"_a, "b"_a, "options"_a = MatchOptions(),
-      "B warped into A's frame by match_pair's homography, the overlap feathered.");
+  m.def("stitch_pair", onImagePair(&stitchPair), "a"_a, "b"_a, "options"_a = MatchOptions(),
+        "B warped into A's frame by match_pair's homography, the overlap feathered.");
   m.def(
       "stitch_many",
       [](const std::vector<py::handle>& images, const MatchOptions& options) {

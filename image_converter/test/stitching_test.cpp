@@ -52,12 +52,16 @@ double largestCornerError(const cv::Matx33d& estimate, const cv::Matx33d& truth,
   return largest;
 }
 
-class TwoViewTest : public ::testing::TestWithParam<Detector> {};
+// The two views, and the default match options with the detector under test.
+class TwoViewTest : public ::testing::TestWithParam<Detector> {
+ protected:
+  void SetUp() override { options.detector = GetParam(); }
 
-TEST_P(TwoViewTest, RecoversTheHomographyWithinOnePixelAtEveryCorner) {
   const TwoViews views = makeTwoViews();
   MatchOptions options;
-  options.detector = GetParam();
+};
+
+TEST_P(TwoViewTest, RecoversTheHomographyWithinOnePixelAtEveryCorner) {
   const PairMatch match = matchPair(views.a, views.b, options);
   ASSERT_TRUE(match.ok()) << match.error;
   const double error = largestCornerError(match.homography, views.b_to_a, views.b.size());
@@ -95,9 +99,6 @@ double overlapMad(const cv::Mat& image, const cv::Point2d& a_origin, const TwoVi
 }
 
 TEST_P(TwoViewTest, StitchMatchesTheSceneInTheOverlapAsWellAsResamplingAllows) {
-  const TwoViews views = makeTwoViews();
-  MatchOptions options;
-  options.detector = GetParam();
   const StitchResult stitched = stitchPair(views.a, views.b, options);
   ASSERT_TRUE(stitched.ok()) << stitched.error;
   // B lies right of A, a little above it (rotated): A lands at column 0, an integer row.

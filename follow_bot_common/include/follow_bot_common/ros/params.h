@@ -107,24 +107,24 @@ inline std::string describeValue(XmlRpc::XmlRpcValue& value) {
 template <typename T>
 struct ParamType;
 
-template <>
-struct ParamType<bool> {
-  static constexpr const char* kName = "a bool (true or false)";
-  static bool read(XmlRpc::XmlRpcValue& value, bool& out) {
-    if (value.getType() != XmlRpc::XmlRpcValue::TypeBoolean) return false;
-    out = value;
+// How to read a T that only the XmlRpc type `kType` holds.
+template <typename T, XmlRpc::XmlRpcValue::Type kType>
+struct ExactParamType {
+  static bool read(XmlRpc::XmlRpcValue& value, T& out) {
+    if (value.getType() != kType) return false;
+    out = static_cast<T&>(value);
     return true;
   }
 };
 
 template <>
-struct ParamType<int> {
+struct ParamType<bool> : ExactParamType<bool, XmlRpc::XmlRpcValue::TypeBoolean> {
+  static constexpr const char* kName = "a bool (true or false)";
+};
+
+template <>
+struct ParamType<int> : ExactParamType<int, XmlRpc::XmlRpcValue::TypeInt> {
   static constexpr const char* kName = "an integer";
-  static bool read(XmlRpc::XmlRpcValue& value, int& out) {
-    if (value.getType() != XmlRpc::XmlRpcValue::TypeInt) return false;
-    out = value;
-    return true;
-  }
 };
 
 // An integer is a number too; NaN and infinities are not (no parameter means "no limit").
@@ -143,13 +143,8 @@ struct ParamType<double> {
 };
 
 template <>
-struct ParamType<std::string> {
+struct ParamType<std::string> : ExactParamType<std::string, XmlRpc::XmlRpcValue::TypeString> {
   static constexpr const char* kName = "a string";
-  static bool read(XmlRpc::XmlRpcValue& value, std::string& out) {
-    if (value.getType() != XmlRpc::XmlRpcValue::TypeString) return false;
-    out = static_cast<std::string&>(value);
-    return true;
-  }
 };
 
 // `name` from `pnh`, or `fallback` when unset; recorded as read (noteParamRead). Throws
