@@ -84,8 +84,8 @@ function(generate_cfg_defaults)
   install(FILES ${headers} DESTINATION ${CATKIN_GLOBAL_INCLUDE_DESTINATION}/${PROJECT_NAME})
 endfunction()
 
-# add_python_core(SOURCE): the calling package's Python module <package>.core,
-# pybind11 bindings (SOURCE) over its <package>_core library, built into the devel space's
+# add_python_core(SOURCE...): the calling package's Python module <package>.core,
+# pybind11 bindings (the SOURCEs) over its <package>_core library, built into the devel space's
 # Python path next to the package catkin_python_setup() makes (python/<package>, ../setup.py),
 # so `from <package> import core` works after sourcing devel/ or install/; installed. Also the
 # executable core_reference (target <package>_core_reference, from core_reference.cpp): the C++ results
@@ -93,13 +93,13 @@ endfunction()
 # The interpreter catkin builds for (the Makefile passes /usr/bin/python3), with its headers
 # (python3-dev). Found as Python3: a dependency's CMake (ament_cmake_core's python.cmake) already
 # runs find_package(Python3), which puts Debian's pybind11 in its FindPython mode anyway.
-function(add_python_core SOURCE)
+function(add_python_core)
   set(Python3_EXECUTABLE ${PYTHON_EXECUTABLE})
   find_package(Python3 REQUIRED COMPONENTS Interpreter Development.Module)
   find_package(pybind11 2.6 CONFIG REQUIRED)
   # A workspace-unique target name; Python sees the file as <package>/core.<SOABI>.so. What
   # pybind11_add_module does, spelt out so catkin_lint can follow the target.
-  add_library(${PROJECT_NAME}_python_core MODULE ${SOURCE})
+  add_library(${PROJECT_NAME}_python_core MODULE ${ARGN})
   pybind11_extension(${PROJECT_NAME}_python_core)  # the module's file name
   target_link_libraries(${PROJECT_NAME}_python_core PRIVATE pybind11::module ${PROJECT_NAME}_core
     ${OpenCV_LIBRARIES})
