@@ -13,18 +13,6 @@ macro(follow_bot_package_defaults)
   set(CMAKE_CXX_STANDARD_REQUIRED ON)
 endmacro()
 
-# add_core_library(SOURCE...): the calling package's ROS-free core, the library <package>_core of
-# the SOURCEs: linked to OpenCV, built with warnings as errors, after the generated headers of the
-# package (generate_cfg_defaults, called before) and of the packages it uses. The package links
-# the rest itself.
-function(add_core_library)
-  add_library(${PROJECT_NAME}_core ${ARGN})
-  target_link_libraries(${PROJECT_NAME}_core ${OpenCV_LIBRARIES})
-  target_compile_options(${PROJECT_NAME}_core PRIVATE -Wall -Wextra -Werror)
-  # The generated headers: its own and those of the packages it uses (follow_bot_common's).
-  add_dependencies(${PROJECT_NAME}_core ${PROJECT_NAME}_cfg_defaults ${catkin_EXPORTED_TARGETS})
-endfunction()
-
 # add_behaviour_node(NODE_NAME NODELET_FACTORY NODELET_HEADER NODELET_LIBRARY NODE_HELP): the
 # executable NODE_NAME of the calling package, a generated main (node_main.cpp.in) that runs the
 # nodelet made by the C++ expression NODELET_FACTORY() (declared in NODELET_HEADER, linked from
