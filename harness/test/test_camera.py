@@ -29,8 +29,8 @@ def test_default_mounting_is_the_behaviours():
     # One default: a world without a camera mounting is seen as the nodes assume it.
     nodes = core.CameraGeometry()
     camera = Camera()
-    assert (camera.height_m, camera.pitch, camera.x_offset_m) == (
-        nodes.height_m, nodes.pitch_rad, nodes.x_offset_m)  # fmt: skip
+    assert (camera.height_m, camera.pitch, camera.x_offset_m) == pytest.approx(
+        (nodes.height_m, nodes.pitch_rad, nodes.x_offset_m), abs=1e-12)  # fmt: skip
     assert camera.pitch == pytest.approx(math.radians(20.0))
 
 

@@ -17,15 +17,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from follow_bot import core
 from harness.geometry import rot_z
 
 FRAME_ID = "camera_rgb_optical_frame"
 DEFAULT_HFOV = math.radians(60.0)  # Kinect-like horizontal field of view
 PINHOLE = (0.0, 0.0, 0.0, 0.0, 0.0)
-# The one default mounting: the behaviours' own (core.CameraGeometry), so a world that leaves it
-# out is seen by the nodes as they would assume it.
-DEFAULT_MOUNTING = core.CameraGeometry()
+# The default mounting is the behaviours' own (core.CameraGeometry, from follow_bot_common's
+# cfg/Camera.cfg), so a world that leaves it out is seen by the nodes as they would assume it.
+# Written as numbers so the simulator runs without the compiled core (an install of the harness
+# alone); harness/test/test_camera.py holds them equal to the core's.
+DEFAULT_HEIGHT_M = 0.30
+DEFAULT_PITCH = math.radians(20.0)
+DEFAULT_X_OFFSET_M = 0.0
 # Named plumb_bob lenses (k1, k2, p1, p2, k3). turtlebot3: the visible barrel distortion of a
 # cheap wide-angle board camera like a TurtleBot3's (straight lines bow ~12 px at the edges).
 LENSES = {"pinhole": PINHOLE, "turtlebot3": (-0.28, 0.07, 0.0, 0.0, 0.0)}
@@ -38,9 +41,9 @@ class Camera:
     width: int = 640
     height: int = 480
     hfov: float = DEFAULT_HFOV
-    height_m: float = DEFAULT_MOUNTING.height_m
-    pitch: float = DEFAULT_MOUNTING.pitch_rad  # radians, positive tilts the axis down
-    x_offset_m: float = DEFAULT_MOUNTING.x_offset_m  # forward of the base origin
+    height_m: float = DEFAULT_HEIGHT_M
+    pitch: float = DEFAULT_PITCH  # radians, positive tilts the axis down
+    x_offset_m: float = DEFAULT_X_OFFSET_M  # forward of the base origin
     # Where the camera really sits off the mounting above, which is all the robot description
     # (and so the node under test) knows: a mounting error (scenario perturbation).
     y_offset_error_m: float = 0.0  # optical centre this far left of where it is said to be
