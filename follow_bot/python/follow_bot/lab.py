@@ -34,6 +34,12 @@ def start(name, doc, params):
     rospy.init_node(name)
 
 
+def fatal(message):
+    """A start-up error: logged as fatal, then exit 2."""
+    rospy.logfatal(message)
+    sys.exit(2)
+
+
 def configured(make, params, prefix="", **fixed):
     """make(**fields, **fixed), each of `params` ({field: default}) from the ~param prefix+field
     when set; a bad value stops the node (exit 2) with the C++ validate() message."""
@@ -43,8 +49,7 @@ def configured(make, params, prefix="", **fixed):
         return make(**fields, **fixed)
     except (ValueError, TypeError) as error:
         which = f" ({', '.join(names.values())})" if names else ""
-        rospy.logfatal(f"invalid parameter{which}: {error}")
-        sys.exit(2)
+        fatal(f"invalid parameter{which}: {error}")
 
 
 def camera_intrinsics(info):
@@ -76,13 +81,11 @@ class CommandOutput:
         timeout = rospy.get_param("~watchdog_timeout", core.WATCHDOG_TIMEOUT)
         rate = rospy.get_param("~expected_frame_rate", core.EXPECTED_FRAME_RATE)
         if not rate >= 0.0:
-            rospy.logfatal(f"~expected_frame_rate must be >= 0 (0: unknown), got {rate}")
-            sys.exit(2)
+            fatal(f"~expected_frame_rate must be >= 0 (0: unknown), got {rate}")
         try:
             self.watchdog = core.FrameWatchdog(timeout, 1.0 / rate if rate else 0.0)
         except ValueError as error:
-            rospy.logfatal(f"~watchdog_timeout: {error}")
-            sys.exit(2)
+            fatal(f"~watchdog_timeout: {error}")
         self.cmd_vel = rospy.Publisher("cmd_vel", Twist, queue_size=1)
         self.status = rospy.Publisher("~status", BehaviourStatus, queue_size=10)
         self.quiet = True  # the last command sent (or none yet) is a zero

@@ -11,13 +11,13 @@ them), ~camera_height, ~camera_pitch_deg, ~camera_x_offset.
 """
 
 import math
-import sys
 import time
 
 import rospy
 import tf2_ros
 
 from follow_bot import core
+from follow_bot.lab import fatal
 
 FOOTPRINT_FRAME = "base_footprint"
 DEFAULTS = core.CAMERA_DEFAULTS  # follow_bot_common/cfg/Camera.cfg's
@@ -40,11 +40,6 @@ def with_mounting(camera, mounting):
         fx=camera.fx, fy=camera.fy, cx=camera.cx, cy=camera.cy, height_m=mounting.height_m,
         pitch_rad=mounting.pitch_rad, x_offset_m=mounting.x_offset_m,
     )  # fmt: skip
-
-
-def fatal(message):
-    rospy.logfatal(message)
-    sys.exit(2)
 
 
 class CameraMounting:
