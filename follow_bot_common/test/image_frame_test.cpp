@@ -37,6 +37,13 @@ TEST(ParseEncoding, RejectsOthers) {
   }
 }
 
+TEST(CheckFrame, AnUnsupportedEncodingListsTheSupportedOnes) {
+  const std::vector<std::uint8_t> data(4 * 4, 0);
+  EXPECT_EQ(checkFrame(frameOf(data, 4, 4, 4, "yuv422")).error,
+            "unsupported encoding 'yuv422' (supported: bgr8, rgb8, bgra8, rgba8, mono8, mono16, "
+            "8UC3, 8UC1)");
+}
+
 TEST(CheckFrame, AcceptsConsistentFrameWithRowPadding) {
   const std::vector<std::uint8_t> data(4 * 16, 0);  // 4 rows of 5 bgr pixels + 1 byte padding
   const FrameCheck check = checkFrame(frameOf(data, 5, 4, 16, "bgr8"));

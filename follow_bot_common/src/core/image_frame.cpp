@@ -1,48 +1,76 @@
 #include "follow_bot_common/image_frame.h"
 
+#include <stdexcept>
+
 #include <opencv2/imgproc.hpp>
 
 namespace follow_bot_common {
 
+namespace {
+
+// One row per supported encoding: its names and how it becomes BGR8.
+struct EncodingInfo {
+  Encoding encoding;
+  const char* name;   // sensor_msgs/image_encodings
+  const char* alias;  // the OpenCV type name some drivers send instead, or nullptr
+  int channels;
+  int value_bytes;  // of one channel value: 1, or 2 for 16-bit
+  int to_bgr;       // the cv::cvtColor code from its 8-bit form; -1: it is BGR8 already
+};
+
+constexpr EncodingInfo kEncodings[] = {
+    {Encoding::kBgr8, "bgr8", "8UC3", 3, 1, -1},
+    {Encoding::kRgb8, "rgb8", nullptr, 3, 1, cv::COLOR_RGB2BGR},
+    {Encoding::kBgra8, "bgra8", nullptr, 4, 1, cv::COLOR_BGRA2BGR},
+    {Encoding::kRgba8, "rgba8", nullptr, 4, 1, cv::COLOR_RGBA2BGR},
+    {Encoding::kMono8, "mono8", "8UC1", 1, 1, cv::COLOR_GRAY2BGR},
+    {Encoding::kMono16, "mono16", nullptr, 1, 2, cv::COLOR_GRAY2BGR},
+};
+
+const EncodingInfo& infoOf(Encoding encoding) {
+  for (const EncodingInfo& info : kEncodings) {
+    if (info.encoding == encoding) return info;
+  }
+  throw std::logic_error("an Encoding without a row in kEncodings");
+}
+
+// "bgr8, rgb8, ..., 8UC3, 8UC1": the names, then the aliases.
+std::string supportedEncodings() {
+  std::string names, aliases;
+  for (const EncodingInfo& info : kEncodings) {
+    names += std::string(names.empty() ? "" : ", ") + info.name;
+    if (info.alias != nullptr) aliases += std::string(", ") + info.alias;
+  }
+  return names + aliases;
+}
+
+}  // namespace
+
 std::optional<Encoding> parseEncoding(const std::string& name) {
-  if (name == "bgr8" || name == "8UC3") return Encoding::kBgr8;
-  if (name == "rgb8") return Encoding::kRgb8;
-  if (name == "bgra8") return Encoding::kBgra8;
-  if (name == "rgba8") return Encoding::kRgba8;
-  if (name == "mono8" || name == "8UC1") return Encoding::kMono8;
-  if (name == "mono16") return Encoding::kMono16;
+  for (const EncodingInfo& info : kEncodings) {
+    if (name == info.name || (info.alias != nullptr && name == info.alias)) return info.encoding;
+  }
   return std::nullopt;
 }
 
-int channels(Encoding encoding) {
-  switch (encoding) {
-    case Encoding::kBgr8:
-    case Encoding::kRgb8:
-      return 3;
-    case Encoding::kBgra8:
-    case Encoding::kRgba8:
-      return 4;
-    case Encoding::kMono8:
-    case Encoding::kMono16:
-      return 1;
-  }
-  return 0;
-}
+int channels(Encoding encoding) { return infoOf(encoding).channels; }
 
 int bytesPerPixel(Encoding encoding) {
-  return encoding == Encoding::kMono16 ? 2 : channels(encoding);
+  const EncodingInfo& info = infoOf(encoding);
+  return info.channels * info.value_bytes;
 }
 
 int cvType(Encoding encoding) {
-  return encoding == Encoding::kMono16 ? CV_16UC1 : CV_8UC(channels(encoding));
+  const EncodingInfo& info = infoOf(encoding);
+  return CV_MAKETYPE(info.value_bytes == 2 ? CV_16U : CV_8U, info.channels);
 }
 
 FrameCheck checkFrame(const RawFrame& frame) {
   FrameCheck result;
   result.encoding = parseEncoding(frame.encoding);
   if (!result.encoding) {
-    result.error = "unsupported encoding '" + frame.encoding +
-                   "' (supported: bgr8, rgb8, bgra8, rgba8, mono8, mono16, 8UC1, 8UC3)";
+    result.error =
+        "unsupported encoding '" + frame.encoding + "' (supported: " + supportedEncodings() + ")";
     result.outcome = FrameOutcome::kBadEncoding;
     return result;
   }
@@ -114,30 +142,12 @@ cv::Mat frameToBgr8(const RawFrame& frame, Encoding encoding) {
 }
 
 cv::Mat toBgr8(const cv::Mat& image, Encoding encoding) {
+  const EncodingInfo& info = infoOf(encoding);
+  if (info.to_bgr < 0) return image.clone();
+  cv::Mat eight_bit = image;
+  if (info.value_bytes == 2) image.convertTo(eight_bit, CV_8U, 1.0 / 256.0);
   cv::Mat bgr;
-  switch (encoding) {
-    case Encoding::kBgr8:
-      bgr = image.clone();
-      break;
-    case Encoding::kRgb8:
-      cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
-      break;
-    case Encoding::kBgra8:
-      cv::cvtColor(image, bgr, cv::COLOR_BGRA2BGR);
-      break;
-    case Encoding::kRgba8:
-      cv::cvtColor(image, bgr, cv::COLOR_RGBA2BGR);
-      break;
-    case Encoding::kMono8:
-      cv::cvtColor(image, bgr, cv::COLOR_GRAY2BGR);
-      break;
-    case Encoding::kMono16: {
-      cv::Mat mono8;
-      image.convertTo(mono8, CV_8U, 1.0 / 256.0);
-      cv::cvtColor(mono8, bgr, cv::COLOR_GRAY2BGR);
-      break;
-    }
-  }
+  cv::cvtColor(eight_bit, bgr, info.to_bgr);
   return bgr;
 }
 
