@@ -7,15 +7,10 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "channels.h"
+
 namespace image_converter {
 namespace {
-
-cv::Mat toGrey(const cv::Mat& image) {
-  if (image.channels() == 1) return image;
-  cv::Mat grey;
-  cv::cvtColor(image, grey, image.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
-  return grey;
-}
 
 // Refines `h` (B into A) by maximising the enhanced correlation coefficient between A and B
 // warped into A's frame, over their overlap. Returns false (leaving `h` alone) when ECC fails or
@@ -194,7 +189,7 @@ std::string checkImage(const cv::Mat& image, const std::string& label, double mi
     return label + " is not an 8-bit grey, BGR or BGRA image";
   }
   cv::Scalar mean, stddev;
-  cv::meanStdDev(toGrey(image), mean, stddev);
+  cv::meanStdDev(withChannels(image, 1), mean, stddev);
   if (stddev[0] < min_contrast) {
     return label + " is blank (grey-level standard deviation " + std::to_string(stddev[0]) + ")";
   }
@@ -229,7 +224,7 @@ PairMatch matchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& opti
   const cv::Ptr<cv::Feature2D> detector = createDetector(options);
   std::vector<cv::KeyPoint> keypoints_a, keypoints_b;
   cv::Mat descriptors_a, descriptors_b;
-  const cv::Mat grey_a = toGrey(a), grey_b = toGrey(b);
+  const cv::Mat grey_a = withChannels(a, 1), grey_b = withChannels(b, 1);
   detector->detectAndCompute(grey_a, cv::noArray(), keypoints_a, descriptors_a);
   detector->detectAndCompute(grey_b, cv::noArray(), keypoints_b, descriptors_b);
   result.keypoints_a = static_cast<int>(keypoints_a.size());

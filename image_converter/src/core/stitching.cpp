@@ -8,15 +8,10 @@
 #include <opencv2/stitching/detail/blenders.hpp>
 #include <opencv2/stitching/detail/warpers.hpp>
 
+#include "channels.h"
+
 namespace image_converter {
 namespace {
-
-cv::Mat toBgr(const cv::Mat& image) {
-  if (image.channels() == 3) return image;
-  cv::Mat bgr;
-  cv::cvtColor(image, bgr, image.channels() == 4 ? cv::COLOR_BGRA2BGR : cv::COLOR_GRAY2BGR);
-  return bgr;
-}
 
 std::string sizeError(const cv::Size& size) {
   if (size.width <= 0 || size.height <= 0 || size.width > kMaxPanoramaSide ||
@@ -93,8 +88,9 @@ StitchResult stitchPair(const cv::Mat& a, const cv::Mat& b, const MatchOptions& 
   const cv::Matx33d shift(1, 0, -min_x, 0, 1, -min_y, 0, 0, 1);
   const cv::Matx33d b_to_panorama = shift * match.homography;
   cv::Mat warped_a, warped_b, mask_a, mask_b;
-  cv::warpPerspective(toBgr(a), warped_a, shift, size, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
-  cv::warpPerspective(toBgr(b), warped_b, b_to_panorama, size, cv::INTER_LINEAR,
+  cv::warpPerspective(withChannels(a, 3), warped_a, shift, size, cv::INTER_LINEAR,
+                      cv::BORDER_CONSTANT);
+  cv::warpPerspective(withChannels(b, 3), warped_b, b_to_panorama, size, cv::INTER_LINEAR,
                       cv::BORDER_CONSTANT);
   // A pixel belongs to a view only where its interpolation read no border: the warped full
   // mask is exactly 255 there.
@@ -162,7 +158,7 @@ StitchResult stitchMany(const std::vector<cv::Mat>& images, const MatchOptions& 
 
   std::vector<cv::Mat> bgr;
   bgr.reserve(images.size());
-  for (const cv::Mat& image : images) bgr.push_back(toBgr(image));
+  for (const cv::Mat& image : images) bgr.push_back(withChannels(image, 3));
   const cv::Ptr<cv::Stitcher> stitcher = cv::Stitcher::create(cv::Stitcher::PANORAMA);
   stitcher->setFeaturesFinder(createDetector(options));
   cv::Mat panorama;
@@ -227,7 +223,7 @@ StitchResult stitchByRotation(const std::vector<cv::Mat>& images, const std::vec
     // Camera rays to panorama-frame rays: optical -> base -> turned by the relative yaw -> level.
     const cv::Matx33f rotation(level.t() * rotationAboutZ(yaws[i] - reference_yaw) * mounted);
     cv::Mat warped_bgr;
-    corners[i] = warper.warp(toBgr(images[i]), cv::Mat(intrinsics), cv::Mat(rotation),
+    corners[i] = warper.warp(withChannels(images[i], 3), cv::Mat(intrinsics), cv::Mat(rotation),
                              cv::INTER_LINEAR, cv::BORDER_REFLECT, warped_bgr);
     warper.warp(cv::Mat(images[i].size(), CV_8U, cv::Scalar(255)), cv::Mat(intrinsics),
                 cv::Mat(rotation), cv::INTER_NEAREST, cv::BORDER_CONSTANT, masks[i]);
