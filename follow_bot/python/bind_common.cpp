@@ -38,11 +38,7 @@ void bindVelocity(py::module_& m) {
   defKeywordInit(twist);
 
   py::class_<VelocityLimiterConfig> config(m, "VelocityLimiterConfig");
-  config.def_readwrite("max_linear", &VelocityLimiterConfig::max_linear)
-      .def_readwrite("max_angular", &VelocityLimiterConfig::max_angular)
-      .def_readwrite("max_linear_accel", &VelocityLimiterConfig::max_linear_accel)
-      .def_readwrite("max_angular_accel", &VelocityLimiterConfig::max_angular_accel)
-      .def_readwrite("allow_reverse", &VelocityLimiterConfig::allow_reverse);
+  bindFields(config);
   defKeywordInit(config,
                  static_cast<Validator<VelocityLimiterConfig>>(&follow_bot_common::validate));
 

@@ -76,5 +76,14 @@ TEST(ConfigFields, AHalfOpenRangeAndAReason) {
             "min_inliers must be >= 4, got 3 (a homography needs 4 points)");
 }
 
+TEST(ConfigFields, SaysEachRuleAsTheParamMessagesDo) {
+  EXPECT_EQ(FieldRule().text(), "");
+  EXPECT_EQ(finite().text(), "");  // a ~param's type says it: "a finite number"
+  EXPECT_EQ(positive().text(), "> 0");
+  EXPECT_EQ(atLeast(0.5).text(), ">= 0.5");
+  EXPECT_EQ(inRange(0.0, 1.0).text(), "in [0, 1]");
+  EXPECT_EQ(aboveAtMost(0.0, 2.5).text(), "in (0, 2.5]");
+}
+
 }  // namespace
 }  // namespace follow_bot_common

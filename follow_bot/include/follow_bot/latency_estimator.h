@@ -19,6 +19,7 @@
 #include <string>
 
 #include "follow_bot/common.h"
+#include "follow_bot_common/config_fields.h"
 #include "follow_bot_common/velocity_limiter.h"
 
 namespace follow_bot {
@@ -31,6 +32,17 @@ struct LatencyEstimatorConfig {
   double min_linear_spread = 0.01;   // m/s, standard deviation for the linear channel to count
   double min_angular_spread = 0.05;  // rad/s, likewise for the angular channel
   double max_unexplained = 0.5;      // of the variance, for a window's estimate to be taken
+
+  static constexpr auto fields() {
+    using C = LatencyEstimatorConfig;
+    return std::make_tuple(field("max_latency", &C::max_latency, positive()),
+                           field("resolution", &C::resolution, positive()),
+                           field("window", &C::window, positive()),
+                           field("update_period", &C::update_period, atLeast(0.0)),
+                           field("min_linear_spread", &C::min_linear_spread, positive()),
+                           field("min_angular_spread", &C::min_angular_spread, positive()),
+                           field("max_unexplained", &C::max_unexplained, inRange(0.0, 1.0)));
+  }
 };
 
 // Empty when usable, else a message naming the first bad field.

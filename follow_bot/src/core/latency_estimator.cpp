@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "follow_bot/common.h"
-#include "follow_bot_common/config_checks.h"
 
 namespace follow_bot {
 namespace {
@@ -25,20 +24,7 @@ bool isAtRest(const Twist2D& twist) { return twist.linear == 0.0 && twist.angula
 
 }  // namespace
 
-std::string validate(const LatencyEstimatorConfig& config) {
-  for (const std::string& error : {
-           requirePositive("max_latency", config.max_latency),
-           requirePositive("resolution", config.resolution),
-           requirePositive("window", config.window),
-           requireAtLeast("update_period", config.update_period, 0.0),
-           requirePositive("min_linear_spread", config.min_linear_spread),
-           requirePositive("min_angular_spread", config.min_angular_spread),
-           requireInRange("max_unexplained", config.max_unexplained, 0.0, 1.0),
-       }) {
-    if (!error.empty()) return error;
-  }
-  return "";
-}
+std::string validate(const LatencyEstimatorConfig& config) { return checkFields(config); }
 
 LatencyEstimator::LatencyEstimator(const LatencyEstimatorConfig& config) : config_(config) {
   const std::string error = validate(config);

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include <sstream>
 #include <string>
 #include <tuple>
 #include <type_traits>
@@ -36,6 +37,30 @@ struct FieldRule {
     FieldRule rule = *this;
     rule.why = reason;
     return rule;
+  }
+
+  // The rule as the messages say it ("> 0", ">= 0", "in [0, 1]", "in (0, 1]"); "" for none and
+  // for finite, which a ~param's type already says.
+  std::string text() const {
+    std::ostringstream out;
+    switch (kind) {
+      case Kind::kNone:
+      case Kind::kFinite:
+        break;
+      case Kind::kPositive:
+        out << "> 0";
+        break;
+      case Kind::kAtLeast:
+        out << ">= " << min;
+        break;
+      case Kind::kInRange:
+        out << "in [" << min << ", " << max << "]";
+        break;
+      case Kind::kAboveAtMost:
+        out << "in (" << min << ", " << max << "]";
+        break;
+    }
+    return out.str();
   }
 
   // "" when `value` meets the rule, otherwise "<name> must be <rule>, got <value>[ (why)]".

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "follow_bot_common/CommandOutputDefaults.h"
+#include "follow_bot_common/config_fields.h"
 
 namespace follow_bot_common {
 
@@ -24,6 +25,17 @@ struct VelocityLimiterConfig {
   double max_linear_accel = follow_bot_common::CommandOutputDefaults::limit_linear_accel;
   double max_angular_accel = follow_bot_common::CommandOutputDefaults::limit_angular_accel;
   bool allow_reverse = false;  // when false, negative linear is clamped to 0
+
+  // The limits are CommandOutput's ~limit_* start-up parameters; allow_reverse is the behaviour's.
+  static constexpr auto fields() {
+    using C = VelocityLimiterConfig;
+    return std::make_tuple(
+        cfgField("max_linear", &C::max_linear, positive(), "limit_linear"),
+        cfgField("max_angular", &C::max_angular, positive(), "limit_angular"),
+        cfgField("max_linear_accel", &C::max_linear_accel, positive(), "limit_linear_accel"),
+        cfgField("max_angular_accel", &C::max_angular_accel, positive(), "limit_angular_accel"),
+        field("allow_reverse", &C::allow_reverse));
+  }
 };
 
 // Empty when the configuration is usable, otherwise a message naming the first bad field.

@@ -4,8 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "follow_bot_common/config_checks.h"
-
 namespace follow_bot_common {
 namespace {
 
@@ -23,16 +21,7 @@ double slowDownOnly(double previous, double target) {
 
 }  // namespace
 
-std::string validate(const VelocityLimiterConfig& config) {
-  for (const std::string& error :
-       {requirePositive("max_linear", config.max_linear),
-        requirePositive("max_angular", config.max_angular),
-        requirePositive("max_linear_accel", config.max_linear_accel),
-        requirePositive("max_angular_accel", config.max_angular_accel)}) {
-    if (!error.empty()) return error;
-  }
-  return "";
-}
+std::string validate(const VelocityLimiterConfig& config) { return checkFields(config); }
 
 VelocityLimiter::VelocityLimiter(const VelocityLimiterConfig& config) : config_(config) {
   const std::string error = validate(config);

@@ -6,6 +6,7 @@
 #include <geometry_msgs/Twist.h>
 
 #include "follow_bot_common/ros/camera_input.h"
+#include "follow_bot_common/ros/config_mapping.h"
 #include "follow_bot_common/ros/params.h"
 #include "follow_bot_common/ros/publish_last.h"
 #include "follow_bot_msgs/BehaviourStatus.h"
@@ -25,10 +26,7 @@ geometry_msgs::Twist twistMsg(const Twist2D& command) {
 VelocityLimiterConfig readLimits(const ros::NodeHandle& pnh, bool allow_reverse) {
   VelocityLimiterConfig config;
   config.allow_reverse = allow_reverse;
-  config.max_linear = positiveParam(pnh, "limit_linear", config.max_linear);
-  config.max_angular = positiveParam(pnh, "limit_angular", config.max_angular);
-  config.max_linear_accel = positiveParam(pnh, "limit_linear_accel", config.max_linear_accel);
-  config.max_angular_accel = positiveParam(pnh, "limit_angular_accel", config.max_angular_accel);
+  readFieldParams(pnh, config);
   return config;
 }
 

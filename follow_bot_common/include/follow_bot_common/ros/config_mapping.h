@@ -12,6 +12,7 @@
 #include <boost/any.hpp>
 
 #include "follow_bot_common/config_fields.h"
+#include "follow_bot_common/ros/params.h"
 
 namespace follow_bot_common {
 
@@ -72,6 +73,30 @@ void assignFromConfig(Struct& core, const ConfigT& config) {
     if (field.cfg_param == nullptr) return;
     core.*field.member = configValue<T>(config, field.cfg_param);
     if constexpr (std::is_floating_point_v<T>) core.*field.member *= field.cfg_scale;
+  });
+}
+
+// Sets each of `core`'s listed fields that a .cfg parameter sets from that ~param, for a .cfg
+// read once at start-up (no dynamic_reconfigure server): a param left unset keeps the field's
+// value; one of another type or breaking the field's rule throws std::invalid_argument
+// "~param must be <rule>, got <value>".
+template <typename Struct>
+void readFieldParams(const ros::NodeHandle& pnh, Struct& core) {
+  forEachField<Struct>([&](const auto& field) {
+    using T = std::decay_t<decltype(core.*field.member)>;
+    if (field.cfg_param == nullptr) return;
+    if (field.cfg_scale != 1.0) {
+      throw std::logic_error(std::string(field.cfg_param) +
+                             ": a start-up parameter is the field itself, unscaled");
+    }
+    if constexpr (std::is_arithmetic_v<T> && !std::is_same_v<T, bool>) {
+      core.*field.member = checkedParam(
+          pnh, field.cfg_param, core.*field.member,
+          [&](T value) { return field.rule.check("", static_cast<double>(value)).empty(); },
+          field.rule.text());
+    } else {
+      core.*field.member = param(pnh, field.cfg_param, core.*field.member);
+    }
   });
 }
 
