@@ -6,8 +6,10 @@
 #include <limits>
 #include <memory>
 #include <opencv2/imgproc.hpp>
-#include <random>
 #include <stdexcept>
+
+#include "follow_bot/common.h"
+#include "follow_bot_common/testing/garbage_numbers.h"
 
 namespace follow_bot {
 namespace {
@@ -253,14 +255,8 @@ TEST(PdLaw, ADenormalIntervalGivesNoDerivative) {
 }
 
 TEST(PdLaw, NeverOutputsNonFiniteValues) {
-  std::mt19937 rng(3);
-  const double specials[] = {kNaN, kInf, -kInf, 1e308, -1e308, 0.0, 5e-324};
-  std::uniform_int_distribution<int> pick(0, 9);
-  std::uniform_real_distribution<double> value(-2.0, 2.0);
-  auto draw = [&] {
-    const int i = pick(rng);
-    return i < 7 ? specials[i] : value(rng);
-  };
+  GarbageNumbers garbage(3, 0.7);
+  const auto draw = [&] { return garbage.maybe(garbage.uniform(-2.0, 2.0)); };
   for (const auto& [mode, kd] :
        {std::pair(SteeringMode::kPD, 0.1), std::pair(SteeringMode::kPD, 0.0),
         std::pair(SteeringMode::kLecture, 0.1)}) {
@@ -270,14 +266,14 @@ TEST(PdLaw, NeverOutputsNonFiniteValues) {
     const std::unique_ptr<SteeringLaw> controller = makeSteeringLaw(config, std::nullopt);
     double stamp = 0.0;
     for (int i = 0; i < 20000; ++i) {
-      LineMeasurement m = seenAtError(value(rng));
-      m.band.found = pick(rng) < 8;
+      LineMeasurement m = seenAtError(garbage.uniform(-2.0, 2.0));
+      m.band.found = garbage.chance(0.8);
       m.band.error_normalised = draw();
       m.band.error_px = draw();
       m.band.confidence = draw();
       m.look_ahead = bandAt(0.0);
       m.look_ahead.error_normalised = draw();
-      stamp = pick(rng) == 0 ? draw() : stamp + std::abs(value(rng)) * 1e-3;
+      stamp = garbage.chance(0.1) ? draw() : stamp + garbage.uniform(0.0, 2e-3);
       const Twist2D twist = controller->step({m, stamp});
       ASSERT_TRUE(std::isfinite(twist.linear) && std::isfinite(twist.angular)) << i;
     }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "follow_bot/common.h"
+#include "follow_bot_common/testing/garbage_numbers.h"
 #include "follow_bot_common/testing/harness_camera.h"
 
 namespace follow_bot {
@@ -673,28 +674,25 @@ TEST(PathLaw, ALineCutByTheImageEdgeIsNotRememberedButStillShownToTheFallback) {
 
 TEST(PathLaw, NeverReturnsNonFiniteUnderGarbage) {
   PathLaw follower(SteeringConfig(), harnessCamera());
-  std::mt19937 random(3);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double specials[] = {kNaN, kInf, -kInf, 0.0, -1e300, 1e300, 1e-300};
-  const auto pick = [&](double normal) {
-    return unit(random) < 0.2 ? specials[random() % std::size(specials)] : normal;
-  };
+  GarbageNumbers garbage(3, 0.2);
+  const auto unit = [&] { return garbage.uniform(0.0, 1.0); };
+  const auto pick = [&](double normal) { return garbage.maybe(normal); };
   double stamp = 0.0;
   Twist2D applied;
   for (int frame = 0; frame < 5000; ++frame) {
-    LineMeasurement m = bandMeasurement(pick(640.0 * unit(random)));
-    m.band.centroid_y = pick(480.0 * unit(random));
-    m.band.centre_y = pick(480.0 * unit(random));
-    m.band.centre_found = unit(random) < 0.8;
-    m.band.confidence = pick(unit(random));
+    LineMeasurement m = bandMeasurement(pick(640.0 * unit()));
+    m.band.centroid_y = pick(480.0 * unit());
+    m.band.centre_y = pick(480.0 * unit());
+    m.band.centre_found = unit() < 0.8;
+    m.band.confidence = pick(unit());
     m.band.error_normalised = pick(m.band.error_normalised);
     m.look_ahead = m.band;
     m.look_ahead.centroid_y = pick(264.0);
     m.look_ahead.centre_y = pick(264.0);
-    m.look_ahead.found = unit(random) < 0.5;
-    const double r = unit(random);
+    m.look_ahead.found = unit() < 0.5;
+    const double r = unit();
     stamp = r < 0.05 ? 0.0 : r < 0.1 ? pick(stamp) : stamp + (r < 0.15 ? 1e6 : kFrameDt);
-    if (unit(random) < 0.2) applied = Twist2D{pick(0.3), pick(1.0)};
+    if (unit() < 0.2) applied = Twist2D{pick(0.3), pick(1.0)};
     const Twist2D command = follower.step({m, stamp, applied});
     ASSERT_TRUE(std::isfinite(command.linear) && std::isfinite(command.angular)) << frame;
     ASSERT_LE(std::abs(command.angular), 1.5 + 1e-12);

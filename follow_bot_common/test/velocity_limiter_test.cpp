@@ -4,8 +4,9 @@
 
 #include <cmath>
 #include <limits>
-#include <random>
 #include <stdexcept>
+
+#include "follow_bot_common/testing/garbage_numbers.h"
 
 namespace follow_bot_common {
 namespace {
@@ -133,14 +134,8 @@ TEST(VelocityLimiter, OutputIsAlwaysFiniteAndWithinBounds) {
   VelocityLimiterConfig config;
   config.allow_reverse = true;
   VelocityLimiter limiter(config);
-  std::mt19937 rng(7);
-  const double specials[] = {kNaN, kInf, -kInf, 1e308, -1e308, 0.0, 1e-320};
-  std::uniform_int_distribution<int> pick(0, 9);
-  std::uniform_real_distribution<double> value(-5.0, 5.0);
-  auto draw = [&] {
-    const int i = pick(rng);
-    return i < 7 ? specials[i] : value(rng);
-  };
+  GarbageNumbers garbage(7, 0.7);
+  const auto draw = [&] { return garbage.maybe(garbage.uniform(-5.0, 5.0)); };
   Twist2D previous;
   for (int i = 0; i < 20000; ++i) {
     const double dt = draw();
