@@ -179,28 +179,27 @@ TEST(PdLaw, LostThenSearchingThenGivesUpThenResumes) {
   PdLaw controller;                          // grace 1 s, search 12 s
   controller.step({seenAtError(0.6), 0.0});  // last seen on the right
 
-  Twist2D twist = controller.step({unseen(), 0.5});
-  EXPECT_EQ(controller.state(), LineState::kLost);
-  EXPECT_DOUBLE_EQ(twist.linear, 0.05);
-  EXPECT_DOUBLE_EQ(twist.angular, -0.4);
-  controller.step({unseen(), 1.0});
-  EXPECT_EQ(controller.state(), LineState::kLost);
+  // Frames without the line: the state after each and its command.
+  struct Unseen {
+    double stamp;
+    LineState state;
+    Twist2D command;
+  };
+  for (const Unseen& frame : {
+           Unseen{0.5, LineState::kLost, {0.05, -0.4}},  // creeps on, turning toward it
+           Unseen{1.0, LineState::kLost, {0.05, -0.4}},
+           Unseen{1.01, LineState::kSearching, {0.0, -0.6}},  // turns on the spot
+           Unseen{13.0, LineState::kSearching, {0.0, -0.6}},
+           Unseen{13.01, LineState::kGaveUp, {0.0, 0.0}},
+           Unseen{500.0, LineState::kGaveUp, {0.0, 0.0}},
+       }) {
+    const Twist2D command = controller.step({unseen(), frame.stamp});
+    EXPECT_EQ(controller.state(), frame.state) << frame.stamp;
+    EXPECT_DOUBLE_EQ(command.linear, frame.command.linear) << frame.stamp;
+    EXPECT_DOUBLE_EQ(command.angular, frame.command.angular) << frame.stamp;
+  }
 
-  twist = controller.step({unseen(), 1.01});
-  EXPECT_EQ(controller.state(), LineState::kSearching);
-  EXPECT_EQ(twist.linear, 0.0);
-  EXPECT_DOUBLE_EQ(twist.angular, -0.6);
-  controller.step({unseen(), 13.0});
-  EXPECT_EQ(controller.state(), LineState::kSearching);
-
-  twist = controller.step({unseen(), 13.01});
-  EXPECT_EQ(controller.state(), LineState::kGaveUp);
-  EXPECT_EQ(twist.linear, 0.0);
-  EXPECT_EQ(twist.angular, 0.0);
-  controller.step({unseen(), 500.0});
-  EXPECT_EQ(controller.state(), LineState::kGaveUp);
-
-  twist = controller.step({seenAtError(-0.2), 501.0});
+  const Twist2D twist = controller.step({seenAtError(-0.2), 501.0});
   EXPECT_EQ(controller.state(), LineState::kFollowing);
   EXPECT_GT(twist.angular, 0.0);
   // Lost again, now on the left: the search turns left.

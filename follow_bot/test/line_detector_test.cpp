@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <stdexcept>
@@ -24,6 +25,17 @@ cv::Mat greyFrame(int rows = 480, int cols = 640) { return cv::Mat(rows, cols, C
 // Paints columns [x, x + width) of rows [top, bottom) yellow.
 void paintStripe(cv::Mat& frame, int x, int width, int top, int bottom) {
   frame(cv::Range(top, bottom), cv::Range(x, x + width)).setTo(kYellow);
+}
+
+struct Stripe {
+  int x, width, top, bottom;
+};
+
+// A grey frame with these stripes painted (paintStripe).
+cv::Mat stripedFrame(std::initializer_list<Stripe> stripes) {
+  cv::Mat frame = greyFrame();
+  for (const Stripe& s : stripes) paintStripe(frame, s.x, s.width, s.top, s.bottom);
+  return frame;
 }
 
 // The lecture's mask: full-frame HSV, inRange, every row outside the band (as placed for the
@@ -352,10 +364,9 @@ TEST(LineDetector, FindsAnAntiAliasedLineWithinHalfAPixel) {
 // band's centroid (the lecture's) lies off the line, its centre (whole runs only) on it.
 TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   const LineDetector detector;
-  cv::Mat left = greyFrame();
-  paintStripe(left, 0, 10, 360, 370);   // cut by the left edge
-  paintStripe(left, 20, 10, 370, 380);  // whole
-  const BandMeasurement entering = detector.detect(left).band;
+  // A patch cut by the left edge, below it a whole run.
+  const BandMeasurement entering =
+      detector.detect(stripedFrame({{0, 10, 360, 370}, {20, 10, 370, 380}})).band;
   EXPECT_EQ(entering.pixel_count, 200);
   EXPECT_DOUBLE_EQ(entering.centroid_x, 14.5);
   EXPECT_DOUBLE_EQ(entering.centroid_y, 369.5);
@@ -370,10 +381,9 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
     EXPECT_EQ(entering.spans[i].right, 29.5);
   }
 
-  cv::Mat right = greyFrame();
-  paintStripe(right, 630, 10, 360, 365);  // cut by the right edge
-  paintStripe(right, 600, 10, 365, 380);
-  const BandMeasurement leaving = detector.detect(right).band;
+  // A patch cut by the right edge, below it a whole run.
+  const BandMeasurement leaving =
+      detector.detect(stripedFrame({{630, 10, 360, 365}, {600, 10, 365, 380}})).band;
   EXPECT_EQ(leaving.pixel_count, 200);
   EXPECT_EQ(leaving.centre_pixel_count, 150);
   EXPECT_DOUBLE_EQ(leaving.centre_x, 604.5);
@@ -384,11 +394,9 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   EXPECT_EQ(leaving.spans.front().right, 609.5);
 
   // In one row a cut patch and a whole run: only the patch is left out.
-  cv::Mat both = greyFrame();
-  paintStripe(both, 0, 5, 360, 380);
-  paintStripe(both, 300, 11, 360, 380);
-  paintStripe(both, 620, 20, 360, 380);
-  const BandMeasurement beside = detector.detect(both).band;
+  const BandMeasurement beside =
+      detector.detect(stripedFrame({{0, 5, 360, 380}, {300, 11, 360, 380}, {620, 20, 360, 380}}))
+          .band;
   EXPECT_EQ(beside.pixel_count, 36 * 20);
   EXPECT_DOUBLE_EQ(beside.centroid_x, (2.0 * 5 + 305.0 * 11 + 629.5 * 20) / 36);
   EXPECT_EQ(beside.centre_pixel_count, 11 * 20);
@@ -399,10 +407,8 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   EXPECT_EQ(beside.spans.back().right, 310.5);
 
   // A row entirely of line colour is cut at both edges.
-  cv::Mat full_row = greyFrame();
-  paintStripe(full_row, 0, 640, 360, 361);
-  paintStripe(full_row, 300, 11, 361, 380);
-  const BandMeasurement across = detector.detect(full_row).band;
+  const BandMeasurement across =
+      detector.detect(stripedFrame({{0, 640, 360, 361}, {300, 11, 361, 380}})).band;
   EXPECT_EQ(across.centre_pixel_count, 11 * 19);
   EXPECT_DOUBLE_EQ(across.centre_x, 305.0);
   EXPECT_DOUBLE_EQ(across.centre_y, 370.0);
@@ -410,11 +416,9 @@ TEST(LineDetector, MeasuresTheLineCentreFromRunsTheSideEdgesDoNotCut) {
   EXPECT_EQ(across.spans.front().row, 361.0);
 
   // Two whole runs in a row (a gap in the paint) and a cut one: the span is the whole runs'.
-  cv::Mat gap = greyFrame();
-  paintStripe(gap, 300, 4, 360, 380);
-  paintStripe(gap, 307, 4, 360, 380);
-  paintStripe(gap, 630, 10, 360, 380);
-  const BandMeasurement gapped = detector.detect(gap).band;
+  const BandMeasurement gapped =
+      detector.detect(stripedFrame({{300, 4, 360, 380}, {307, 4, 360, 380}, {630, 10, 360, 380}}))
+          .band;
   ASSERT_EQ(gapped.spans.size(), 20u);
   EXPECT_EQ(gapped.spans[7].left, 299.5);
   EXPECT_EQ(gapped.spans[7].right, 310.5);
