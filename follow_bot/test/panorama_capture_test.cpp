@@ -78,15 +78,24 @@ TEST(PanoramaCapture, IdleCaptureCommandsNothing) {
 }
 
 TEST(PanoramaCapture, RejectsUnusableConfigurations) {
+  const auto error_with = [](double PanoramaCaptureConfig::*member, double value) {
+    PanoramaCaptureConfig config;
+    config.*member = value;
+    return validate(config);
+  };
+  EXPECT_EQ(validate(PanoramaCaptureConfig()), "");
+  EXPECT_EQ(error_with(&PanoramaCaptureConfig::total_angle, 7.0),
+            "total_angle must be in (0, 2 pi) rad");
+  EXPECT_EQ(error_with(&PanoramaCaptureConfig::step_angle, 0.0),
+            "step_angle must be in (0, total_angle] rad");
+  EXPECT_EQ(error_with(&PanoramaCaptureConfig::yaw_gain, 0.0), "yaw_gain must be > 0, got 0");
+  EXPECT_EQ(error_with(&PanoramaCaptureConfig::min_turn_rate, 5.0),
+            "min_turn_rate must be in (0, max_turn_rate] rad/s");
+  EXPECT_EQ(error_with(&PanoramaCaptureConfig::yaw_tolerance, 0.5),
+            "yaw_tolerance must be in (0, step_angle / 2) rad");
   PanoramaCaptureConfig config;
-  config.step_angle = 0.0;
-  EXPECT_NE(validate(config).find("step_angle"), std::string::npos);
-  config = PanoramaCaptureConfig();
   config.total_angle = 7.0;
   EXPECT_THROW(PanoramaCapture{config}, std::invalid_argument);
-  config = PanoramaCaptureConfig();
-  config.yaw_tolerance = 0.5;
-  EXPECT_NE(validate(config).find("yaw_tolerance"), std::string::npos);
 }
 
 TEST(YawOfQuaternion, ReadsUnitQuaternionsAndRejectsTheRest) {
