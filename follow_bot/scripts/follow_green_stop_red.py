@@ -17,9 +17,7 @@ STEERING = {core.BeaconState.searching, core.BeaconState.approaching}
 lab.start("follow_green_stop_red", __doc__, {
     "mode": "follow_green_stop_red (default) or approach",
     "close_area": "follow mode: hold once the green blob covers this many px^2",
-    "watchdog_timeout": "s without a frame before one zero Twist, at least "
-                        f"({core.WATCHDOG_TIMEOUT}; a slower camera: 3 frame periods)",
-    "expected_frame_rate": "the camera's rate, Hz: the watchdog's until measured (0: unknown)",
+    **lab.COMMAND_HELP,
 })  # fmt: skip
 defaults = core.BeaconControllerConfig()
 params = {"mode": "follow_green_stop_red", "close_area": defaults.close_area}

@@ -23,9 +23,7 @@ lab.start("line_follower", __doc__, {
     "kd": "rad/s per unit of error per s (0: P control)",
     "band_distance": "crop: the rows showing the floor this far ahead, m (0.46; the lecture's "
                      "3/4 of the height on the default mounting)",
-    "watchdog_timeout": "s without a frame before one zero Twist, at least "
-                        f"({core.WATCHDOG_TIMEOUT}; a slower camera: 3 frame periods)",
-    "expected_frame_rate": "the camera's rate, Hz: the watchdog's until measured (0: unknown)",
+    **lab.COMMAND_HELP,
     **mounting.HELP,
 })  # fmt: skip
 defaults = core.SteeringConfig()

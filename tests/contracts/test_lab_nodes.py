@@ -182,10 +182,12 @@ def test_lab_nodes_answer_help_with_both_pythons():
             assert "private parameters:" in out.stdout and "~" in out.stdout, script
 
 
-def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown():
+@pytest.mark.parametrize("limit_linear", [None, 0.02])
+def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown(limit_linear):
+    limit = [] if limit_linear is None else [f"_limit_linear:={limit_linear}"]
     with private_master() as env:
         node = subprocess.Popen(
-            ["rosrun", "follow_bot", "follow_green_stop_red.py"], env=env,
+            ["rosrun", "follow_bot", "follow_green_stop_red.py", *limit], env=env,
             stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
         )  # fmt: skip
         try:
@@ -203,8 +205,11 @@ def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown():
     assert [s[4] for s in statuses] == ["approaching"] * 15 + ["stopped_by_red"] * 30
     assert all(s[0] and s[1] for s in statuses[:15])  # active: a command every frame
     speeds = [s[2] for s in statuses[:15]]
-    # Ramped up by the limiter from the first frame's zero (no interval to accelerate over yet).
-    assert speeds == sorted(speeds) and speeds[0] == 0.0 < speeds[1] < speeds[-1]
+    if limit_linear is None:
+        # Ramped up by the limiter from the first frame's zero (no interval to accelerate yet).
+        assert speeds == sorted(speeds) and speeds[0] == 0.0 < speeds[1] < speeds[-1]
+    else:  # held at ~limit_linear from the second frame on (well below the approach speed)
+        assert speeds == [0.0] + [limit_linear] * 14
     idle = statuses[15:]
     assert not any(s[0] for s in idle)
     sent = [(s[2], s[3]) for s in idle if s[1]]
@@ -225,6 +230,10 @@ def test_follow_green_stop_red_drives_then_stops_once_and_zeroes_on_shutdown():
         ("line_follower", "_expected_frame_rate:=-5.0",
          "~expected_frame_rate must be >= 0 (0: unknown), got -5.0"),
         ("colour_filter", "_colour:=purple", "~colour must be red, green or blue, got 'purple'"),
+        ("follow_green_stop_red", "_limit_linear:=0",
+         "~limit_linear: max_linear must be > 0, got 0"),
+        ("line_follower", "_limit_angular_accel:=fast",
+         "~limit_angular_accel must be a number, got 'fast'"),
         ("three_colours", "_sensitivity:=95",
          "invalid parameter: colours[0] (red): sensitivity must be in [0, 90], got 95"),
     ],

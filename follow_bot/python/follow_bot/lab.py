@@ -2,11 +2,11 @@
 C++ validate(), camera frames as numpy arrays, and the behaviour contract for cmd_vel.
 
 The contract (docs/behaviour_contract.md), as follow_bot_common::CommandOutput keeps it for the C++
-nodes: commands pass the VelocityLimiter; while the behaviour is active one Twist per frame, on
-becoming idle the limiter's ramp down to one zero and then nothing; one ~status per frame (the
-lockstep simulator waits for it); no frame for ~watchdog_timeout of ROS time (or 3 frame
-periods of a slower camera, ~expected_frame_rate's until measured: core.FrameWatchdog): one
-zero; on shutdown a last zero.
+nodes: commands pass the VelocityLimiter (the ~limit_* params); while the behaviour is active
+one Twist per frame, on becoming idle the limiter's ramp down to one zero and then nothing; one
+~status per frame (the lockstep simulator waits for it); no frame for ~watchdog_timeout of ROS
+time (or 3 frame periods of a slower camera, ~expected_frame_rate's until measured:
+core.FrameWatchdog): one zero; on shutdown a last zero.
 """
 
 import argparse
@@ -73,11 +73,38 @@ def subscribe_frames(callback):
     return rospy.Subscriber(IMAGE, Image, unpack, queue_size=1, buff_size=2**24)
 
 
+_DEFAULT_LIMITS = core.VelocityLimiterConfig()
+# The ~params CommandOutput reads (follow_bot_common/cfg/CommandOutput.cfg, as the C++ nodes),
+# for the driving nodes' --help.
+COMMAND_HELP = {
+    **{param: f"hard limit ({getattr(_DEFAULT_LIMITS, field)}; follow_bot_common/cfg/CommandOutput.cfg)"
+       for field, param, _ in _DEFAULT_LIMITS.CFG_FIELDS},
+    "watchdog_timeout": "s without a frame before one zero Twist, at least "
+                        f"({core.WATCHDOG_TIMEOUT}; a slower camera: 3 frame periods)",
+    "expected_frame_rate": "the camera's rate, Hz: the watchdog's until measured (0: unknown)",
+}  # fmt: skip
+
+
+def limits(allow_reverse):
+    """core.VelocityLimiterConfig of the ~limit_* params (unset: the default); a bad value stops
+    the node (exit 2) naming the param."""
+    config = core.VelocityLimiterConfig(allow_reverse=allow_reverse)
+    for field, param, _ in config.CFG_FIELDS:
+        value = rospy.get_param("~" + param, getattr(config, field))
+        try:
+            setattr(config, field, value)
+        except TypeError:
+            fatal(f"~{param} must be a number, got {value!r}")
+        if error := config.validate():
+            fatal(f"~{param}: {error}")
+    return config
+
+
 class CommandOutput:
     """cmd_vel (relative) and ~status by the behaviour contract; see the module doc."""
 
     def __init__(self, allow_reverse=False):
-        self.limiter = core.VelocityLimiter(core.VelocityLimiterConfig(allow_reverse=allow_reverse))
+        self.limiter = core.VelocityLimiter(limits(allow_reverse))
         timeout = rospy.get_param("~watchdog_timeout", core.WATCHDOG_TIMEOUT)
         rate = rospy.get_param("~expected_frame_rate", core.EXPECTED_FRAME_RATE)
         if not rate >= 0.0:
