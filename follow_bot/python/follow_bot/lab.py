@@ -77,8 +77,8 @@ _DEFAULT_LIMITS = core.VelocityLimiterConfig()
 # The ~params CommandOutput reads (follow_bot_common/cfg/CommandOutput.cfg, as the C++ nodes),
 # for the driving nodes' --help.
 COMMAND_HELP = {
-    **{param: f"hard limit ({getattr(_DEFAULT_LIMITS, field)}; follow_bot_common/cfg/CommandOutput.cfg)"
-       for field, param, _ in _DEFAULT_LIMITS.CFG_FIELDS},
+    **{param: f"hard limit, {getattr(_DEFAULT_LIMITS, field):g} (cfg/CommandOutput.cfg of "
+              "follow_bot_common)" for field, param, _ in _DEFAULT_LIMITS.CFG_FIELDS},
     "watchdog_timeout": "s without a frame before one zero Twist, at least "
                         f"({core.WATCHDOG_TIMEOUT}; a slower camera: 3 frame periods)",
     "expected_frame_rate": "the camera's rate, Hz: the watchdog's until measured (0: unknown)",
